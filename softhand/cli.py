@@ -1,0 +1,234 @@
+"""The ``softhand`` command line.
+
+``softhand fe indent DESIGN``   one FE indentation (``--json`` for machine-readable output)
+``softhand fe sweep``           all 12 designs, curves + summary + plot into calibration/fe
+``softhand fe export DESIGN``   an Abaqus input deck of the same model
+``softhand bench fe``           speed against error of the FE stage, written to a report
+
+Bad input exits with status 2 and one line that names the value and the allowed range; nothing
+is written then.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from softhand import __version__
+
+DEFAULT_FE_DIR = Path("calibration") / "fe"
+
+
+def _fail(exc: Exception) -> None:
+    raise click.UsageError(str(exc)) from None
+
+
+def _parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise click.BadParameter(f"{item!r} is not KEY=VALUE", param_hint="--geometry")
+        try:
+            out[key.strip()] = float(value)
+        except ValueError:
+            raise click.BadParameter(f"{value!r} in {item!r} is not a number",
+                                     param_hint="--geometry") from None
+    return out
+
+
+def _load_materials(path: str | None) -> dict[str, dict]:
+    if path is None:
+        return {}
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise click.BadParameter(f"{path!r}: {exc}", param_hint="--materials") from None
+    if not isinstance(data, dict):
+        raise click.BadParameter(f"{path!r} must hold an object keyed by material name",
+                                 param_hint="--materials")
+    return data
+
+
+def _settings(**kw: Any):
+    from softhand.fem.solver import IndentationSettings
+
+    try:
+        return IndentationSettings(**kw)
+    except ValueError as exc:
+        _fail(exc)
+
+
+_common_fe = [
+    click.option("--mesh", type=click.Choice(["coarse", "default", "fine"]), default="default",
+                 show_default=True, help="Mesh density (fine doubles every element count)."),
+    click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d", show_default=True,
+                 help="3D quarter model, or fast 2D plane-strain cross-section."),
+    click.option("--elastic-only", is_flag=True, help="Hyperfoam only, no Prony relaxation."),
+    click.option("--moduli", type=click.Choice(["long-term", "instantaneous"]),
+                 default="long-term", show_default=True,
+                 help="How Table 3 moduli are read."),
+    click.option("--hold", "hold_s", type=float, default=10.0, show_default=True,
+                 help="Hold after the ramp (s)."),
+    click.option("--speed", "speed_mm_s", type=float, default=0.5, show_default=True,
+                 help="Plate speed (mm/s)."),
+    click.option("--max-force", "max_force_N", type=float, default=2.0, show_default=True,
+                 help="Force that ends the ramp (N)."),
+    click.option("--geometry", multiple=True, metavar="KEY=VALUE",
+                 help="Override a geometry field, e.g. pocket_roof_mm=1.5 (repeatable)."),
+    click.option("--materials", "materials_path", type=click.Path(dir_okay=False),
+                 help="JSON file with material constants replacing Table 3."),
+]
+
+
+def _fe_options(f):
+    for opt in reversed(_common_fe):
+        f = opt(f)
+    return f
+
+
+def _make_settings(mesh, mode, elastic_only, moduli, hold_s, speed_mm_s, max_force_N,
+                   geometry, materials_path):
+    return _settings(mesh=mesh, mode=mode, elastic_only=elastic_only, moduli=moduli,
+                     hold_s=hold_s, speed_mm_s=speed_mm_s, max_force_N=max_force_N,
+                     geometry=_parse_geometry(geometry), materials=_load_materials(materials_path))
+
+
+@click.group()
+@click.version_option(__version__, prog_name="softhand")
+def main() -> None:
+    """softhand: lifelike prosthetic skins, from FE indentation to MuJoCo."""
+
+
+@main.group()
+def fe() -> None:
+    """Finite-element indentation of the paper's phalanx designs."""
+
+
+@fe.command("indent")
+@click.argument("design")
+@_fe_options
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              help="Write the curve CSV and summary JSON here.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def fe_indent(design, out_dir, as_json, **kw) -> None:
+    """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate."""
+    from tqdm import tqdm
+
+    from softhand.fem.geometry import parse_design
+    from softhand.fem.solver import ConvergenceError, indent
+    from softhand.fem.sweep import write_results
+
+    try:
+        design = parse_design(design).name
+    except ValueError as exc:
+        _fail(exc)
+    settings = _make_settings(**kw)
+    with tqdm(total=100, desc=design, unit="%", disable=as_json, file=sys.stderr) as bar:
+        def progress(frac: float) -> None:
+            bar.update(round(100 * frac) - bar.n)
+
+        try:
+            result = indent(design, settings, progress=progress)
+        except ValueError as exc:
+            _fail(exc)
+        except ConvergenceError as exc:
+            click.echo(f"error: {exc}", err=True)
+            sys.exit(3)
+    if out_dir:
+        write_results({design: result}, out_dir, plot=False)
+    summary = result.summary()
+    if as_json:
+        click.echo(json.dumps(summary))
+        return
+    _print_result(summary)
+
+
+def _print_result(s: dict[str, Any]) -> None:
+    from softhand.paper import displacement_at_2n, force_at_2mm
+
+    def fmt(v, unit):
+        return "not reached" if v is None else f"{v:.3f} {unit}"
+
+    click.echo(f"design {s['design']} ({s['mode']}, mesh {s['mesh']}, moduli {s['moduli']})")
+    ref = displacement_at_2n(s["design"])
+    click.echo(f"  displacement at 2 N : {fmt(s['displacement_at_2N_mm'], 'mm')}"
+               + (f"   (paper {ref} mm)" if ref else ""))
+    ref = force_at_2mm(s["design"])
+    click.echo(f"  force at 2 mm       : {fmt(s['force_at_2mm_N'], 'N')}"
+               + (f"   (paper {ref} N)" if ref else ""))
+    click.echo(f"  peak / after hold   : {s['peak_force_N']:.3f} N / {s['relaxed_force_N']:.3f} N")
+    click.echo(f"  {s['n_elements']} elements, {s['n_dofs']} dofs, {s['n_steps']} steps, "
+               f"{s['newton_iterations']} Newton iterations, {s['wall_s']:.1f} s")
+
+
+@fe.command("sweep")
+@_fe_options
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=str(DEFAULT_FE_DIR),
+              show_default=True, help="Folder for curves, summary.json and curves.png.")
+@click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
+def fe_sweep(out_dir, designs, **kw) -> None:
+    """Indent all 12 designs and compare them with the paper."""
+    from softhand.fem.geometry import DESIGNS, parse_design
+    from softhand.fem.solver import ConvergenceError
+    from softhand.fem.sweep import paper_error_table, run_sweep, write_results
+
+    settings = _make_settings(**kw)
+    try:
+        names = [parse_design(d).name for d in (designs or DESIGNS)]
+        for n in names:
+            parse_design(n).geometry(**settings.geometry)
+    except ValueError as exc:
+        _fail(exc)
+    try:
+        results = run_sweep(names, settings)
+    except ConvergenceError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(3)
+    summary = write_results(results, out_dir)
+    click.echo(paper_error_table(summary))
+    click.echo(f"wrote {len(results)} curves, summary.json and curves.png to {out_dir} "
+               f"({summary['total_wall_s']:.0f} s of FE)")
+
+
+@fe.command("export")
+@click.argument("design")
+@click.argument("out", type=click.Path(dir_okay=False))
+@click.option("--format", "fmt", type=click.Choice(["inp"]), default="inp", show_default=True,
+              help="Abaqus input deck.")
+@_fe_options
+def fe_export(design, out, fmt, **kw) -> None:
+    """Write DESIGN as an Abaqus-format input deck to OUT."""
+    from softhand.fem.abaqus import write_inp
+
+    settings = _make_settings(**kw)
+    try:
+        path = write_inp(design, out, settings)
+    except ValueError as exc:
+        _fail(exc)
+    click.echo(f"wrote {path}")
+
+
+@main.group()
+def bench() -> None:
+    """Benchmarks: speed against error, written to a report (never run as tests)."""
+
+
+@bench.command("fe")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              default="reports", show_default=True, help="Folder for bench-fe.md/json.")
+@click.option("--quick", is_flag=True, help="Skip the fine-mesh reference runs.")
+def bench_fe(out_dir, quick) -> None:
+    """Time one 3D design, the 12-design sweep and the 2D mode; errors against the fine mesh."""
+    from softhand.fem.bench import run_fe_benchmark
+
+    report = run_fe_benchmark(out_dir, quick=quick)
+    click.echo(report)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,29 @@
+"""Stage 1: finite-element indentation of synthetic finger phalanges (paper, Methods: FE).
+
+Public entry points: :func:`indent` for one design, :func:`run_sweep` for many, and the
+materials, geometry and mesh building blocks they use.
+"""
+
+from softhand.fem.geometry import DESIGNS, Design, PhalanxGeometry, parse_design
+from softhand.fem.materials import Hyperfoam, Material, Prony, material
+from softhand.fem.solver import (
+    ConvergenceError,
+    IndentationResult,
+    IndentationSettings,
+    indent,
+)
+
+__all__ = [
+    "DESIGNS",
+    "ConvergenceError",
+    "Design",
+    "Hyperfoam",
+    "IndentationResult",
+    "IndentationSettings",
+    "Material",
+    "PhalanxGeometry",
+    "Prony",
+    "indent",
+    "material",
+    "parse_design",
+]

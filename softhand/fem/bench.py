@@ -1,0 +1,121 @@
+"""Benchmark of the FE stage: speed against error, written to a report.
+
+Measures, in one process on this machine:
+
+* one 3D design to 2 N at the default mesh (ramp only), and the same with the 10 s hold;
+* the full 12-design sweep at the default settings (3D, default mesh, ramp + hold);
+* the reduced 2D plane-strain mode for all 12 designs;
+* 3D fine-mesh references (every element count doubled) for solid-sil and pocket2-sil, and the
+  error of coarse, default and 2D results against them (the mesh-convergence study).
+
+Timings are wall-clock seconds; they are reported, never asserted by tests.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from pathlib import Path
+from typing import Any
+
+from softhand.fem.geometry import DESIGNS
+from softhand.fem.solver import IndentationSettings, indent
+from softhand.fem.sweep import compare_with_paper, git_revision, run_sweep
+from softhand.io import atomic_write_json, atomic_write_text
+
+__all__ = ["run_fe_benchmark"]
+
+REFERENCE_DESIGNS = ("solid-sil", "pocket2-sil")
+
+
+def _pct(a: float | None, b: float | None) -> float | None:
+    return None if a is None or b is None else 100.0 * (a - b) / b
+
+
+def run_fe_benchmark(out_dir: str | Path = "reports", *, quick: bool = False) -> str:
+    """Run the benchmark, write ``bench-fe.json`` and ``bench-fe.md``, return the Markdown."""
+    out = Path(out_dir)
+    ramp = IndentationSettings(hold_s=0.0)
+    data: dict[str, Any] = {"machine": {"platform": platform.platform(),
+                                        "cpus": os.cpu_count(),
+                                        "python": platform.python_version()},
+                            "git_revision": git_revision()}
+    one = indent("pocket2-sil", ramp)
+    one_hold = indent("pocket2-sil", IndentationSettings())
+    data["one_design"] = {"design": "pocket2-sil", "ramp_wall_s": one.wall_s,
+                          "ramp_hold_wall_s": one_hold.wall_s, "n_dofs": one.n_dofs}
+    t0 = time.perf_counter()
+    sweep = run_sweep(DESIGNS, IndentationSettings(), show_progress=True)
+    sweep_wall = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sweep2d = run_sweep(DESIGNS, IndentationSettings(mode="2d"), show_progress=True)
+    sweep2d_wall = time.perf_counter() - t0
+    s3 = {n: r.summary() for n, r in sweep.items()}
+    s2 = {n: r.summary() for n, r in sweep2d.items()}
+    data["sweep_3d"] = {"wall_s": sweep_wall, "per_design_s": {n: r.wall_s for n, r in sweep.items()},
+                        "comparison": compare_with_paper(s3)}
+    data["sweep_2d"] = {"wall_s": sweep2d_wall,
+                        "per_design_s": {n: r.wall_s for n, r in sweep2d.items()},
+                        "comparison": compare_with_paper(s2)}
+    data["designs"] = {n: {"3d_d2N": s3[n]["displacement_at_2N_mm"],
+                           "2d_d2N": s2[n]["displacement_at_2N_mm"],
+                           "2d_vs_3d_pct": _pct(s2[n]["displacement_at_2N_mm"],
+                                                s3[n]["displacement_at_2N_mm"]),
+                           "3d_F2mm": s3[n]["force_at_2mm_N"],
+                           "relaxed_over_peak": s3[n]["relaxed_force_N"] / s3[n]["peak_force_N"]}
+                       for n in DESIGNS}
+    conv: dict[str, Any] = {}
+    if not quick:
+        for name in REFERENCE_DESIGNS:
+            row: dict[str, Any] = {}
+            fine = indent(name, IndentationSettings(mesh="fine", hold_s=0.0))
+            ref = fine.displacement_at(2.0)
+            row["fine"] = {"d2N": ref, "wall_s": fine.wall_s, "n_dofs": fine.n_dofs}
+            for label, st in (("coarse", IndentationSettings(mesh="coarse", hold_s=0.0)),
+                              ("default", ramp),
+                              ("2d", IndentationSettings(mode="2d", hold_s=0.0))):
+                r = indent(name, st)
+                row[label] = {"d2N": r.displacement_at(2.0), "wall_s": r.wall_s,
+                              "n_dofs": r.n_dofs,
+                              "error_vs_fine_pct": _pct(r.displacement_at(2.0), ref)}
+            conv[name] = row
+    data["mesh_convergence"] = conv
+    atomic_write_json(out / "bench-fe.json", data)
+    md = _markdown(data)
+    atomic_write_text(out / "bench-fe.md", md)
+    return md
+
+
+def _markdown(d: dict[str, Any]) -> str:
+    def f(v, spec=".3f"):
+        return "" if v is None else format(v, spec)
+
+    lines = [
+        "# FE benchmark (`softhand bench fe`)", "",
+        f"Machine: {d['machine']['platform']}, {d['machine']['cpus']} CPUs, Python "
+        f"{d['machine']['python']}; git {d['git_revision']}.", "",
+        "| what | wall (s) |", "|---|---|",
+        f"| one 3D design (pocket2-sil) to 2 N, default mesh | {d['one_design']['ramp_wall_s']:.1f} |",
+        f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",
+        f"| 12-design sweep, 3D, ramp + hold | {d['sweep_3d']['wall_s']:.1f} |",
+        f"| 12-design sweep, 2D plane strain, ramp + hold | {d['sweep_2d']['wall_s']:.1f} |", "",
+        "| design | 3D d(2 N) mm | 2D d(2 N) mm | 2D vs 3D | 3D F(2 mm) N | F after hold / peak |",
+        "|---|---|---|---|---|---|",
+    ]
+    for n, r in d["designs"].items():
+        lines.append(f"| {n} | {f(r['3d_d2N'])} | {f(r['2d_d2N'])} | {f(r['2d_vs_3d_pct'], '+.1f')} % "
+                     f"| {f(r['3d_F2mm'])} | {f(r['relaxed_over_peak'])} |")
+    if d["mesh_convergence"]:
+        lines += ["", "Mesh convergence, displacement at 2 N against the 3D fine mesh "
+                  "(every element count doubled), ramp only:", "",
+                  "| design | model | dofs | d(2 N) mm | error vs fine | wall (s) |",
+                  "|---|---|---|---|---|---|"]
+        for n, row in d["mesh_convergence"].items():
+            lines.append(f"| {n} | 3D fine | {row['fine']['n_dofs']} | {f(row['fine']['d2N'])} "
+                         f"| reference | {row['fine']['wall_s']:.1f} |")
+            for label in ("default", "coarse", "2d"):
+                r = row[label]
+                lines.append(f"| {n} | {label} | {r['n_dofs']} | {f(r['d2N'])} | "
+                             f"{f(r['error_vs_fine_pct'], '+.2f')} % | {r['wall_s']:.1f} |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,252 @@
+"""Structured quadratic meshes of a phalanx: 2D half cross-section or 3D quarter.
+
+The cross-section is mapped from a (level, theta) grid. Levels run from the base centre outward:
+first a core filled by scaling the deepest offset curve towards the base centre, then bands of
+constant normal depth under the outer profile (floor, pocket, roof, outer layer), so that the
+outer layer and the pocket have exactly their thickness everywhere. The 3D mesh extrudes the
+half section over half the length. Symmetry: x = 0 (both) and z = 0 (3D); the base y = 0 is fixed.
+
+Element counts per band are set by :class:`MeshSpec`; ``fine`` doubles every count of ``default``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from softhand.fem.elements import ReferenceElement, reference_element
+from softhand.fem.geometry import PhalanxGeometry
+
+__all__ = ["MESH_LEVELS", "Mesh", "MeshSpec", "build_mesh", "face_element"]
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """Element counts of the structured mesh (quadratic elements).
+
+    Attributes:
+        n_side: elements along the profile from the base to the pocket edge.
+        n_top: elements from the pocket edge to the top centre (the contact zone).
+        n_outer, n_roof, n_pocket, n_floor, n_core: elements through each band, outside in.
+        n_length: elements along the half length (3D only).
+        top_grading: ratio of the first to the last element along ``n_top`` (< 1 refines the top).
+    """
+
+    n_side: int = 2
+    n_top: int = 5
+    n_outer: int = 1
+    n_roof: int = 1
+    n_pocket: int = 1
+    n_floor: int = 1
+    n_core: int = 2
+    n_length: int = 3
+    top_grading: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("n_side", "n_top", "n_outer", "n_roof", "n_pocket", "n_floor", "n_core",
+                     "n_length"):
+            v = getattr(self, name)
+            if not isinstance(v, int | np.integer) or v < 1:
+                raise ValueError(f"{name} = {v!r} must be an integer >= 1")
+
+    def refined(self, factor: int = 2) -> MeshSpec:
+        """Every element count multiplied by ``factor``."""
+        return MeshSpec(*(getattr(self, n) * factor for n in (
+            "n_side", "n_top", "n_outer", "n_roof", "n_pocket", "n_floor", "n_core",
+            "n_length")), top_grading=self.top_grading)
+
+
+MESH_LEVELS: dict[str, MeshSpec] = {
+    "coarse": MeshSpec(n_side=1, n_top=3, n_core=1, n_floor=1, n_length=2),
+    "default": MeshSpec(),
+}
+MESH_LEVELS["fine"] = MESH_LEVELS["default"].refined(2)
+
+
+@dataclass
+class Mesh:
+    """A quadratic Lagrange mesh with its boundary sets.
+
+    Attributes:
+        dim: 2 (plane strain, per unit length) or 3.
+        X: reference node coordinates (n_nodes, dim), mm.
+        elements: node indices (n_elements, 3**dim).
+        layer: 0 for the inner part, 1 for the outer layer, per element.
+        ref: reference element with its Gauss rule.
+        fixed: DOF indices held at zero (base and symmetry planes).
+        outer_faces: node indices of the faces on the outer surface (n, 3**(dim-1)).
+        roof_faces, floor_faces: facing pocket surfaces, paired row by row.
+        symmetry_factor: multiplier from the modelled part to the whole phalanx force.
+        length_mm: length the 2D force per unit length is multiplied by.
+    """
+
+    dim: int
+    X: np.ndarray
+    elements: np.ndarray
+    layer: np.ndarray
+    ref: ReferenceElement
+    fixed: np.ndarray
+    outer_faces: np.ndarray
+    roof_faces: np.ndarray
+    floor_faces: np.ndarray
+    symmetry_factor: float
+    length_mm: float
+    spec: MeshSpec = field(default_factory=MeshSpec)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.X.shape[0] * self.dim
+
+    @property
+    def n_elements(self) -> int:
+        return self.elements.shape[0]
+
+
+def face_element(dim: int, n_gauss: int) -> ReferenceElement:
+    """Reference element of a face (dimension dim - 1) with its own Gauss rule."""
+    return reference_element(dim - 1, n_gauss)
+
+
+def _graded(n: int, ratio: float) -> np.ndarray:
+    """n + 1 points on [0, 1] whose first/last spacing ratio is ``ratio``."""
+    if n == 1 or ratio == 1.0:
+        return np.linspace(0.0, 1.0, n + 1)
+    q = ratio ** (-1.0 / (n - 1))
+    steps = q ** np.arange(n)
+    return np.concatenate([[0.0], np.cumsum(steps) / steps.sum()])
+
+
+def _with_midpoints(edges: np.ndarray) -> np.ndarray:
+    """Element edges (n+1) to the 2n+1 node lines of a quadratic mesh."""
+    out = np.empty(2 * len(edges) - 1)
+    out[0::2] = edges
+    out[1::2] = 0.5 * (edges[:-1] + edges[1:])
+    return out
+
+
+def _level_lines(geom: PhalanxGeometry, spec: MeshSpec):
+    """Node lines through the depth: ('core', s) or ('depth', d), with band ids per element."""
+    roof = geom.pocket_roof_mm
+    pocket = geom.pocket_height_mm if geom.has_pocket else 2.0
+    deep = geom.band_depth_mm
+    bands = [  # name, depth from, depth to (inward = larger depth), elements; inside out
+        ("floor", deep, roof + pocket, spec.n_floor),
+        ("pocket", roof + pocket, roof, spec.n_pocket),
+        ("roof", roof, geom.outer_layer_mm, spec.n_roof),
+        ("outer", geom.outer_layer_mm, 0.0, spec.n_outer),
+    ]
+    kinds, values, band_of_element = [], [], []
+    s = _with_midpoints(np.linspace(0.0, 1.0, spec.n_core + 1))
+    kinds += ["core"] * len(s)
+    values += list(s)
+    band_of_element += ["core"] * spec.n_core
+    for name, d0, d1, n in bands:
+        d = _with_midpoints(np.linspace(d0, d1, n + 1))[1:]
+        kinds += ["depth"] * len(d)
+        values += list(d)
+        band_of_element += [name] * n
+    return kinds, np.array(values), band_of_element
+
+
+def _section(geom: PhalanxGeometry, spec: MeshSpec):
+    """Node coordinates of the half section on the (level, theta) grid and element bands."""
+    th_p = geom.pocket_edge_theta()
+    side = np.linspace(0.0, th_p, spec.n_side + 1)
+    top = th_p + (0.5 * np.pi - th_p) * _graded(spec.n_top, spec.top_grading)
+    theta = _with_midpoints(np.concatenate([side, top[1:]]))
+    kinds, values, bands = _level_lines(geom, spec)
+    deep = geom.offset(theta, geom.band_depth_mm)
+    grid = np.empty((len(values), len(theta), 2))
+    for k, (kind, v) in enumerate(zip(kinds, values, strict=True)):
+        grid[k] = v * deep if kind == "core" else geom.offset(theta, v)
+    grid[:, 0, 1] = 0.0  # theta = 0 line lies on the base exactly
+    grid[:, -1, 0] = 0.0  # theta = pi/2 line lies on the symmetry plane exactly
+    return grid, bands, spec.n_side
+
+
+def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
+    """Build the structured quadratic mesh of one phalanx design geometry.
+
+    Args:
+        geom: phalanx dimensions and pocket.
+        spec: element counts.
+        dim: 3 for the quarter model, 2 for the plane-strain half cross-section.
+    """
+    if dim not in (2, 3):
+        raise ValueError(f"dim = {dim!r}: allowed 2 (plane strain) or 3")
+    grid, bands, n_side = _section(geom, spec)
+    nk, ni = grid.shape[:2]
+    ek, ei = (nk - 1) // 2, (ni - 1) // 2
+    if dim == 3:
+        z = _with_midpoints(np.linspace(0.0, 0.5 * geom.length_mm, spec.n_length + 1))
+        ez = spec.n_length
+    else:
+        z = np.zeros(1)
+        ez = 1
+    nz = len(z)
+    # global grid index -> node id, collapsing the base centre (core s = 0) per z line
+    gid = np.arange(nk * ni * nz).reshape(nk, ni, nz)
+    gid[0] = gid[0, :1]
+    coords = np.empty((nk, ni, nz, dim))
+    coords[..., 0] = grid[:, :, None, 0]
+    coords[..., 1] = grid[:, :, None, 1]
+    if dim == 3:
+        coords[..., 2] = z[None, None, :]
+
+    local = [(p0, p1, p2) for p2 in range(3 if dim == 3 else 1) for p1 in range(3)
+             for p0 in range(3)]
+    elems, layer, void = [], [], []
+    roof_rows, floor_rows, outer_rows = [], [], []
+    for kz in range(ez):
+        for ki in range(ei):
+            for kk in range(ek):
+                idx = [gid[2 * kk + p0, 2 * ki + p1, (2 * kz + p2) if dim == 3 else 0]
+                       for (p0, p1, p2) in local]
+                band = bands[kk]
+                in_pocket = geom.has_pocket and band == "pocket" and ki >= n_side
+                void.append(in_pocket)
+                elems.append(idx)
+                layer.append(1 if band == "outer" else 0)
+                e = len(elems) - 1
+                if kk == ek - 1:
+                    outer_rows.append(e)
+                if geom.has_pocket and ki >= n_side:
+                    if band == "roof" and kk > 0 and bands[kk - 1] == "pocket":
+                        roof_rows.append(e)
+                    if band == "floor" and kk + 1 < ek and bands[kk + 1] == "pocket":
+                        floor_rows.append(e)
+    elems = np.array(elems)
+    keep = ~np.array(void)
+    # renumber to the used nodes only
+    flat_coords = coords.reshape(-1, dim)
+    used = np.unique(elems[keep])
+    new_id = -np.ones(flat_coords.shape[0], dtype=np.int64)
+    new_id[used] = np.arange(len(used))
+    X = flat_coords[used]
+    conn_all = new_id[elems]
+
+    npf = 3 ** (dim - 1)
+    face_hi = [a for a, p in enumerate(local) if p[0] == 2]  # xi0 = +1
+    face_lo = [a for a, p in enumerate(local) if p[0] == 0]  # xi0 = -1
+    outer_faces = conn_all[outer_rows][:, face_hi]
+    roof_faces = conn_all[roof_rows][:, face_lo].reshape(-1, npf)
+    floor_faces = conn_all[floor_rows][:, face_hi].reshape(-1, npf)
+    conn = conn_all[keep]
+    layer = np.array(layer)[keep]
+
+    tol = 1e-9
+    fixed_nodes_y0 = np.flatnonzero(np.abs(X[:, 1]) < tol)
+    fixed = [fixed_nodes_y0 * dim + c for c in range(dim)]
+    fixed.append(np.flatnonzero(np.abs(X[:, 0]) < tol) * dim + 0)
+    if dim == 3:
+        fixed.append(np.flatnonzero(np.abs(X[:, 2]) < tol) * dim + 2)
+    fixed = np.unique(np.concatenate(fixed))
+
+    ref = reference_element(dim, 3)
+    return Mesh(
+        dim=dim, X=X, elements=conn, layer=layer, ref=ref, fixed=fixed,
+        outer_faces=outer_faces, roof_faces=roof_faces, floor_faces=floor_faces,
+        symmetry_factor=2.0 if dim == 2 else 4.0,
+        length_mm=geom.length_mm if dim == 2 else 1.0, spec=spec,
+    )

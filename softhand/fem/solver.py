@@ -1,0 +1,401 @@
+"""Displacement-driven plate indentation: ramp at constant speed, then hold.
+
+The plate moves down at ``speed_mm_s`` until the reaction reaches ``max_force_N`` (or the plate
+reaches ``max_depth_mm``), then stays put for ``hold_s`` while the skin relaxes. Each step solves
+the nonlinear equilibrium with Newton's method on the free DOFs (base fixed, symmetry planes),
+with penalty contact. Steps adapt: they grow after easy steps, are capped so that the force rises
+by at most ``force_step_N`` per step, land on the target force, and are cut back and retried when
+Newton fails. When the step falls below ``min_step_mm`` the run stops with a
+:class:`ConvergenceError` that carries the step log.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
+from enum import Enum
+from typing import Any
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from softhand.fem.assembly import Assembler, ElementError, ElementState
+from softhand.fem.contact import GapSet, plate_gaps, pocket_gaps
+from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
+from softhand.fem.materials import Material, Moduli, material
+from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh
+
+__all__ = [
+    "ConvergenceError",
+    "IndentationResult",
+    "IndentationSettings",
+    "Status",
+    "indent",
+    "interpolate_crossing",
+]
+
+SOLVER_VERSION = "1"
+
+
+class ConvergenceError(RuntimeError):
+    """Newton did not converge even at the smallest allowed step.
+
+    Attributes:
+        log: the step records up to the failure (list of dicts).
+        diagnostics: the failing step's state (time, plate displacement, residual history).
+    """
+
+    def __init__(self, message: str, *, log: list[dict], diagnostics: dict) -> None:
+        super().__init__(message)
+        self.log = log
+        self.diagnostics = diagnostics
+
+
+class Status(str, Enum):
+    REACHED_FORCE = "reached_force"
+    REACHED_DEPTH = "reached_depth"
+
+
+@dataclass(frozen=True)
+class IndentationSettings:
+    """Everything that defines one indentation run besides the design.
+
+    Attributes:
+        mode: ``"3d"`` (quarter model) or ``"2d"`` (plane-strain cross-section, times length).
+        mesh: ``"coarse"``, ``"default"``, ``"fine"`` or a :class:`MeshSpec`.
+        speed_mm_s: plate speed during the ramp (paper: 0.5), > 0.
+        max_force_N: reaction at which the ramp stops (paper: 2 N), > 0.
+        max_depth_mm: plate travel at which the ramp stops regardless of force, > 0.
+        hold_s: hold after the ramp, >= 0 (0: no hold).
+        moduli: Table 3 moduli read as ``"long-term"`` or ``"instantaneous"``.
+        elastic_only: drop the Prony series (Table 3 moduli as written, no hold).
+        penalty_N_mm3: contact penalty per unit area and penetration, > 0.
+        force_step_N: largest force increase per step (default max_force_N / 12).
+        min_step_mm: smallest plate increment before giving up, > 0.
+        max_step_mm: largest plate increment, > 0.
+        geometry: overrides of :class:`PhalanxGeometry` fields.
+        materials: per material name (``sil``, ``pu``), constants replacing Table 3 (keys
+            ``nu``, ``mu_MPa``, ``alpha``, ``g``, ``tau_s``).
+    """
+
+    mode: str = "3d"
+    mesh: str | MeshSpec = "default"
+    speed_mm_s: float = 0.5
+    max_force_N: float = 2.0
+    max_depth_mm: float = 6.0
+    hold_s: float = 10.0
+    moduli: Moduli = "long-term"
+    elastic_only: bool = False
+    penalty_N_mm3: float = 2000.0
+    force_step_N: float | None = None
+    min_step_mm: float = 1e-6
+    max_step_mm: float = 0.1
+    max_newton: int = 25
+    geometry: dict[str, float] = field(default_factory=dict)
+    materials: dict[str, dict] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("3d", "2d"):
+            raise ValueError(f"mode = {self.mode!r}: allowed '3d' or '2d'")
+        if isinstance(self.mesh, str) and self.mesh not in MESH_LEVELS:
+            raise ValueError(f"mesh = {self.mesh!r}: allowed {', '.join(MESH_LEVELS)}")
+        for name in ("speed_mm_s", "max_force_N", "max_depth_mm", "penalty_N_mm3",
+                     "min_step_mm", "max_step_mm"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v <= 0:
+                raise ValueError(f"{name} = {v!r} must be finite and > 0")
+        if not np.isfinite(self.hold_s) or self.hold_s < 0:
+            raise ValueError(f"hold_s = {self.hold_s!r} must be finite and >= 0")
+        if self.force_step_N is not None and not self.force_step_N > 0:
+            raise ValueError(f"force_step_N = {self.force_step_N!r} must be > 0")
+        for name in self.materials:
+            try:
+                _material(name, self)
+            except ValueError as exc:
+                raise ValueError(f"materials[{name!r}]: {exc}") from None
+        unknown = set(self.geometry) - set(PhalanxGeometry.__dataclass_fields__)
+        if unknown:
+            raise ValueError(f"geometry fields {sorted(unknown)} are unknown; allowed: "
+                             f"{', '.join(PhalanxGeometry.__dataclass_fields__)}")
+
+    @property
+    def mesh_spec(self) -> MeshSpec:
+        return MESH_LEVELS[self.mesh] if isinstance(self.mesh, str) else self.mesh
+
+
+@dataclass(frozen=True)
+class IndentationResult:
+    """One indentation curve and how it was obtained.
+
+    Attributes:
+        design: design name.
+        settings: the settings used.
+        time_s, displacement_mm, force_N: the curve (plate displacement, whole-phalanx force).
+        hold: True for points of the hold phase.
+        status: why the ramp ended.
+        log: one record per accepted step (Newton iterations, residual, contact points).
+        wall_s: wall-clock time of the run.
+        n_dofs, n_elements: model size.
+    """
+
+    design: str
+    settings: IndentationSettings
+    time_s: np.ndarray
+    displacement_mm: np.ndarray
+    force_N: np.ndarray
+    hold: np.ndarray
+    status: Status
+    log: list[dict]
+    wall_s: float
+    n_dofs: int
+    n_elements: int
+
+    def displacement_at(self, force_N: float) -> float | None:
+        """Plate displacement (mm) where the ramp first reaches ``force_N``, or None."""
+        ramp = ~self.hold
+        return interpolate_crossing(self.force_N[ramp], self.displacement_mm[ramp], force_N)
+
+    def force_at(self, displacement_mm: float) -> float | None:
+        """Force (N) on the ramp at plate displacement ``displacement_mm``, or None."""
+        ramp = ~self.hold
+        d, f = self.displacement_mm[ramp], self.force_N[ramp]
+        if displacement_mm > d[-1] + 1e-12:
+            return None
+        return float(np.interp(displacement_mm, d, f))
+
+    def summary(self) -> dict[str, Any]:
+        """The machine-readable result (the CLI's ``--json``)."""
+        s = self.settings
+        return {
+            "design": self.design,
+            "mode": s.mode,
+            "mesh": s.mesh if isinstance(s.mesh, str) else asdict(s.mesh),
+            "moduli": s.moduli,
+            "elastic_only": s.elastic_only,
+            "status": self.status.value,
+            "displacement_at_2N_mm": self.displacement_at(2.0),
+            "displacement_at_1N_mm": self.displacement_at(1.0),
+            "force_at_2mm_N": self.force_at(2.0),
+            "peak_force_N": float(self.force_N.max()),
+            "relaxed_force_N": float(self.force_N[-1]),
+            "wall_s": self.wall_s,
+            "n_dofs": self.n_dofs,
+            "n_elements": self.n_elements,
+            "n_steps": len(self.log),
+            "newton_iterations": int(sum(r["iterations"] for r in self.log)),
+            "solver_version": SOLVER_VERSION,
+            "time_s": self.time_s.tolist(),
+            "displacement_mm": self.displacement_mm.tolist(),
+            "force_N": self.force_N.tolist(),
+        }
+
+
+def interpolate_crossing(x: np.ndarray, y: np.ndarray, level: float) -> float | None:
+    """y where x first rises through ``level`` (linear interpolation), or None if it never does."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    above = np.flatnonzero(x >= level)
+    if above.size == 0:
+        return None
+    k = int(above[0])
+    if k == 0:
+        return float(y[0])
+    t = (level - x[k - 1]) / (x[k] - x[k - 1])
+    return float(y[k - 1] + t * (y[k] - y[k - 1]))
+
+
+class _Model:
+    """Mesh, assembler and contact sets of one run, with a Newton solver for one step."""
+
+    def __init__(self, design: Design, geom: PhalanxGeometry, settings: IndentationSettings):
+        self.settings = settings
+        mats = [_material(design.inner, settings), _material(design.outer, settings)]
+        self.mesh: Mesh = build_mesh(geom, settings.mesh_spec, dim=3 if settings.mode == "3d" else 2)
+        self.asm = Assembler(self.mesh, mats)
+        self.plate: GapSet = plate_gaps(self.mesh, geom.height_mm)
+        self.pocket: GapSet | None = pocket_gaps(self.mesh)
+        free = np.ones(self.mesh.n_dofs, dtype=bool)
+        free[self.mesh.fixed] = False
+        self.free = np.flatnonzero(free)
+        self.scale = self.mesh.symmetry_factor * self.mesh.length_mm
+        self.penalty = settings.penalty_N_mm3
+
+    def plate_force(self, u: np.ndarray, d: float) -> float:
+        return self.plate.force(u, self.penalty, -d) * self.scale
+
+    def newton(self, u0: np.ndarray, state: ElementState, dt: float, d: float, tol_N: float):
+        """Solve one step; return (u, new_state, iterations, residual history, contact counts)."""
+        u = u0.copy()
+        history: list[float] = []
+        closed_prev = None
+        for it in range(1, self.settings.max_newton + 1):
+            f, K, new_state = self.asm.assemble(u, state, dt)
+            rp, Kp, n_plate = self.plate.add(u, self.penalty, -d)
+            f += rp
+            K = K + Kp
+            n_pocket = 0
+            if self.pocket is not None:
+                rc, Kc, n_pocket = self.pocket.add(u, self.penalty)
+                f += rc
+                K = K + Kc
+            r = f[self.free]
+            res = float(np.abs(r).max())
+            history.append(res)
+            if not np.isfinite(res):
+                raise ElementError("residual is not finite")
+            closed = (n_plate, n_pocket)
+            if res <= tol_N and closed == closed_prev:
+                return u, new_state, it, history, closed
+            closed_prev = closed
+            Kff = K[self.free][:, self.free].tocsc()
+            du = _solve(Kff, -r)
+            if not np.all(np.isfinite(du)):
+                raise ElementError("linear solve returned non-finite values")
+            step = 1.0
+            for _ in range(6):  # backtrack only if the update inverts an element
+                trial = u.copy()
+                trial[self.free] += step * du
+                if np.all(np.linalg.det(self.asm.deformation_gradient(trial)) > 0):
+                    break
+                step *= 0.5
+            u = trial
+        raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
+                           f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
+
+
+def _solve(K, b: np.ndarray) -> np.ndarray:
+    """Solve K x = b for the symmetric tangent (SuperLU in symmetric mode, no pivoting)."""
+    lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options={"SymmetricMode": True})
+    return lu.solve(b)
+
+
+def _material(name: str, s: IndentationSettings) -> Material:
+    return material(name, moduli=s.moduli, elastic_only=s.elastic_only,
+                    constants=s.materials.get(name))
+
+
+def indent(
+    design: str | Design,
+    settings: IndentationSettings | None = None,
+    *,
+    progress: Callable[[float], None] | None = None,
+) -> IndentationResult:
+    """Indent one design with a rigid plate and return its force-displacement-time curve.
+
+    Args:
+        design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
+        settings: run settings (defaults: 3D, default mesh, 0.5 mm/s to 2 N, 10 s hold).
+        progress: called with the fraction done (0..1) after each accepted step.
+
+    Raises:
+        ValueError: unknown design or invalid settings/geometry (before any work is done).
+        ConvergenceError: equilibrium could not be found even at the smallest step.
+    """
+    t_start = time.perf_counter()
+    design = parse_design(design) if isinstance(design, str) else design
+    s = settings or IndentationSettings()
+    geom = design.geometry(**s.geometry)
+    model = _Model(design, geom, s)
+    do_hold = s.hold_s > 0 and not s.elastic_only
+    f_step = s.force_step_N or s.max_force_N / 12.0
+    tol = lambda F: 1e-7 + 1e-6 * abs(F) / model.scale  # noqa: E731  (modelled-part units)
+
+    u = np.zeros(model.mesh.n_dofs)
+    u_old = u.copy()
+    state = model.asm.initial_state()
+    t, d, F = 0.0, 0.0, 0.0
+    times, disps, forces, holds = [0.0], [0.0], [0.0], [False]
+    log: list[dict] = []
+    dd, dd_prev, k_est = 0.02, None, None
+    status = Status.REACHED_DEPTH
+
+    def record(phase: str, it: int, hist: list[float], closed: tuple[int, int], inc: float):
+        log.append({"step": len(log) + 1, "phase": phase, "time_s": t, "displacement_mm": d,
+                    "force_N": F, "iterations": it, "residual_N": hist[-1] * model.scale,
+                    "plate_points": closed[0], "pocket_points": closed[1], "increment": inc})
+
+    # --- ramp ----------------------------------------------------------------------------
+    while True:
+        if s.max_force_N * (1 - 1e-9) <= F:
+            status = Status.REACHED_FORCE
+            break
+        if d >= s.max_depth_mm - 1e-12:
+            break
+        if k_est is not None and k_est > 0:
+            dd = min(dd, f_step / k_est)
+            if F + k_est * dd > s.max_force_N:
+                dd = max((s.max_force_N - F) / k_est * 1.001, 1e-4 * (s.max_force_N / k_est))
+        dd = min(dd, s.max_step_mm, s.max_depth_mm - d)
+        guess = u + (dd / dd_prev) * (u - u_old) if dd_prev else u
+        try:
+            u_new, st_new, it, hist, closed = model.newton(
+                guess, state, dd / s.speed_mm_s if not s.elastic_only else 0.0, d + dd, tol(F))
+        except (ElementError, FloatingPointError, RuntimeError) as exc:
+            dd *= 0.25
+            if dd < s.min_step_mm:
+                raise ConvergenceError(
+                    f"{design.name}: no equilibrium at plate displacement {d:.4f} mm "
+                    f"(t = {t:.3f} s, F = {F:.4f} N) even with a {dd * 4:.2e} mm step: {exc}",
+                    log=log, diagnostics={"time_s": t, "displacement_mm": d, "force_N": F,
+                                          "last_error": str(exc)},
+                ) from exc
+            continue
+        u_old, u, state = u, u_new, st_new
+        d_prev_val, F_prev = d, F
+        d += dd
+        t = d / s.speed_mm_s
+        F = model.plate_force(u, d)
+        k_est = (F - F_prev) / (d - d_prev_val) if F_prev < F else k_est
+        dd_prev = dd
+        record("ramp", it, hist, closed, dd)
+        times.append(t)
+        disps.append(d)
+        forces.append(F)
+        holds.append(False)
+        dd *= 1.5 if it <= 4 else (1.0 if it <= 8 else 0.6)
+        if progress:
+            progress(0.8 * min(1.0, max(F / s.max_force_N, d / s.max_depth_mm)))
+
+    # --- hold ----------------------------------------------------------------------------
+    if do_hold:
+        t_end = t + s.hold_s
+        dt = min(0.01, s.hold_s)
+        t0 = t
+        while t < t_end - 1e-12:
+            dt = min(dt, t_end - t)
+            try:
+                u_new, st_new, it, hist, closed = model.newton(u, state, dt, d, tol(F))
+            except (ElementError, FloatingPointError, RuntimeError) as exc:
+                dt *= 0.25
+                if dt < 1e-6:
+                    raise ConvergenceError(
+                        f"{design.name}: hold at {d:.4f} mm failed at t = {t:.3f} s: {exc}",
+                        log=log, diagnostics={"time_s": t, "displacement_mm": d,
+                                              "last_error": str(exc)},
+                    ) from exc
+                continue
+            u, state = u_new, st_new
+            t += dt
+            F = model.plate_force(u, d)
+            record("hold", it, hist, closed, dt)
+            times.append(t)
+            disps.append(d)
+            forces.append(F)
+            holds.append(True)
+            dt *= 1.6
+            if progress:
+                progress(0.8 + 0.2 * (t - t0) / s.hold_s)
+    if progress:
+        progress(1.0)
+    return IndentationResult(
+        design=design.name, settings=s, time_s=np.array(times), displacement_mm=np.array(disps),
+        force_N=np.array(forces), hold=np.array(holds), status=status, log=log,
+        wall_s=time.perf_counter() - t_start, n_dofs=model.mesh.n_dofs,
+        n_elements=model.mesh.n_elements,
+    )
+
+
+def with_settings(settings: IndentationSettings, **changes: Any) -> IndentationSettings:
+    """A copy of ``settings`` with fields replaced (validated again)."""
+    return replace(settings, **changes)

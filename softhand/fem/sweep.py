@@ -1,0 +1,207 @@
+"""Run many designs, compare them with the paper, and write curves with provenance.
+
+Output folder layout (``calibration/fe`` by default)::
+
+    {design}.csv        time_s, displacement_mm, force_N, hold (0 ramp / 1 hold)
+    summary.json        per-design results, paper numbers, errors, settings and provenance
+    curves.png          force-displacement curves against the paper's numbers (like Fig. 7)
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import subprocess
+from collections.abc import Iterable
+from dataclasses import asdict
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softhand import __version__
+from softhand.fem.geometry import DESIGNS, parse_design
+from softhand.fem.solver import SOLVER_VERSION, IndentationResult, IndentationSettings, indent
+from softhand.io import atomic_open, atomic_write_json, atomic_write_text
+from softhand.paper import paper
+
+__all__ = ["compare_with_paper", "curve_csv", "git_revision", "run_sweep", "write_results"]
+
+
+def git_revision() -> str:
+    """The current git commit of the source tree (with ``+dirty``), or ``"unknown"``."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                             text=True, timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=root, capture_output=True, text=True, timeout=10).stdout
+        return rev + ("+dirty" if dirty.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def curve_csv(result: IndentationResult) -> str:
+    """The curve of one run as CSV text."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time_s", "displacement_mm", "force_N", "hold"])
+    for t, d, f, h in zip(result.time_s, result.displacement_mm, result.force_N, result.hold,
+                          strict=True):
+        w.writerow([f"{t:.6g}", f"{d:.8g}", f"{f:.8g}", int(h)])
+    return buf.getvalue()
+
+
+def compare_with_paper(summaries: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """Per-design errors against the paper, and the layered-design changes."""
+    P = paper()
+    rows: dict[str, Any] = {}
+    for name, s in summaries.items():
+        row: dict[str, Any] = {}
+        ref = P["displacement_at_2N_mm"].get(name)
+        got = s.get("displacement_at_2N_mm")
+        if ref is not None and got is not None:
+            row["displacement_at_2N"] = {"paper": ref, "softhand": got,
+                                         "error_pct": 100 * (got - ref) / ref}
+        ref = P["force_at_2mm_N"].get(name)
+        got = s.get("force_at_2mm_N")
+        if ref is not None and got is not None:
+            row["force_at_2mm"] = {"paper": ref, "softhand": got,
+                                   "error_pct": 100 * (got - ref) / ref}
+        d = parse_design(name)
+        homog = f"{d.topology}-{d.inner}"
+        if not d.homogeneous and homog in summaries:
+            base = summaries[homog].get("displacement_at_2N_mm")
+            if base and s.get("displacement_at_2N_mm") is not None:
+                change = 100 * (s["displacement_at_2N_mm"] - base) / base
+                layered = {"softhand_pct": change}
+                paper_change = P["layered_change_pct"].get(name)
+                if paper_change is not None:
+                    layered["paper_pct"] = paper_change
+                    layered["difference_pp"] = change - paper_change
+                else:
+                    layered["paper_within_abs_pct"] = P["layered_change_pct"]["others_within_abs"]
+                row["layered_change"] = layered
+        rows[name] = row
+    return rows
+
+
+def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | None = None,
+              *, show_progress: bool = True) -> dict[str, IndentationResult]:
+    """Indent every design with the same settings; a progress bar counts designs."""
+    from tqdm import tqdm
+
+    designs = [parse_design(d).name for d in designs]  # validate all names first
+    settings = settings or IndentationSettings()
+    results: dict[str, IndentationResult] = {}
+    bar = tqdm(designs, desc="fe sweep", unit="design", disable=not show_progress)
+    for name in bar:
+        bar.set_postfix_str(name)
+        results[name] = indent(name, settings)
+    return results
+
+
+def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
+                  *, plot: bool = True) -> dict[str, Any]:
+    """Write curves, the summary with provenance and the plot into ``out_dir`` (atomically)."""
+    out = Path(out_dir)
+    summaries = {}
+    hashes = {}
+    for name, r in results.items():
+        text = curve_csv(r)
+        atomic_write_text(out / f"{name}.csv", text)
+        hashes[name] = hashlib.sha256(text.encode()).hexdigest()
+        summaries[name] = {k: v for k, v in r.summary().items()
+                           if k not in ("time_s", "displacement_mm", "force_N")}
+    first = next(iter(results.values()))
+    settings = asdict(first.settings)
+    summary = {
+        "provenance": {
+            "softhand_version": __version__,
+            "solver_version": SOLVER_VERSION,
+            "git_revision": git_revision(),
+            "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "settings": settings,
+            "mesh_sizes": {n: {"n_elements": r.n_elements, "n_dofs": r.n_dofs}
+                           for n, r in results.items()},
+            "curve_sha256": hashes,
+            "paper": paper()["source"],
+        },
+        "designs": summaries,
+        "comparison": compare_with_paper(summaries),
+        "total_wall_s": float(sum(r.wall_s for r in results.values())),
+    }
+    atomic_write_json(out / "summary.json", summary)
+    if plot:
+        plot_curves(results, out / "curves.png")
+    return summary
+
+
+def plot_curves(results: dict[str, IndentationResult], path: str | Path) -> None:
+    """Force against displacement for every design, with the paper's points (like Fig. 7)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    P = paper()
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+    colors = {"solid": "tab:blue", "pocket1": "tab:orange", "pocket2": "tab:green"}
+    styles = {("sil", "sil"): "-", ("pu", "pu"): "--", ("sil", "pu"): "-.", ("pu", "sil"): ":"}
+    for name, r in results.items():
+        d = parse_design(name)
+        ramp = ~r.hold
+        lw = 2.2 if d.homogeneous else 1.1
+        ax.plot(r.displacement_mm[ramp], r.force_N[ramp], styles[(d.inner, d.outer)],
+                color=colors[d.topology], lw=lw, label=name)
+        if r.hold.any():
+            t0 = r.time_s[~r.hold][-1]
+            ax2.plot(r.time_s[r.hold] - t0, r.force_N[r.hold] / r.force_N[~r.hold][-1],
+                     styles[(d.inner, d.outer)], color=colors[d.topology], lw=lw, label=name)
+    for name, v in P["displacement_at_2N_mm"].items():
+        if name.startswith("_"):
+            continue
+        d = parse_design(name)
+        ax.plot(v, 2.0, "o", color=colors[d.topology], mfc="white", ms=7)
+    for name, v in P["force_at_2mm_N"].items():
+        if name.startswith("_"):
+            continue
+        ax.plot(2.0, v, "s", color=colors["pocket2"], mfc="white", ms=7)
+    ax.set_xlabel("plate displacement (mm)")
+    ax.set_ylabel("force (N)")
+    ax.set_title("Ramp at 0.5 mm/s (lines: softhand; o: paper at 2 N; s: paper at 2 mm)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    ax2.set_xlabel("hold time (s)")
+    ax2.set_ylabel("force / force at end of ramp")
+    ax2.set_title("Relaxation during the hold")
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    with atomic_open(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110)
+    plt.close(fig)
+
+
+def paper_error_table(summary: dict[str, Any]) -> str:
+    """A Markdown table of softhand against the paper (used by the README and the CLI)."""
+    lines = ["| design | paper d(2 N) mm | softhand d(2 N) mm | error | paper F(2 mm) N | "
+             "softhand F(2 mm) N | error |", "|---|---|---|---|---|---|---|"]
+    for name in summary["designs"]:
+        s = summary["designs"][name]
+        c = summary["comparison"].get(name, {})
+        dp = c.get("displacement_at_2N", {})
+        fp = c.get("force_at_2mm", {})
+        d2 = s.get("displacement_at_2N_mm")
+        f2 = s.get("force_at_2mm_N")
+        lines.append(
+            f"| {name} | {dp.get('paper', '')} | {'' if d2 is None else f'{d2:.3f}'} | "
+            f"{_pct(dp.get('error_pct'))} | {fp.get('paper', '')} | "
+            f"{'' if f2 is None or name.split('-')[0] != 'pocket2' else f'{f2:.3f}'} | "
+            f"{_pct(fp.get('error_pct'))} |")
+    return "\n".join(lines)
+
+
+def _pct(v: float | None) -> str:
+    return "" if v is None or not np.isfinite(v) else f"{v:+.1f} %"
