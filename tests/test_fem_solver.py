@@ -1,0 +1,110 @@
+"""Indentation solver: relaxation, hard cases, mesh convergence (2D), and run bookkeeping.
+
+Hard cases run in the 2D plane-strain mode (the same solver, elements and contact as 3D) so the
+suite stays fast; the 3D runs are in test_fem_paper.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from softhand.fem.materials import material
+from softhand.fem.mesh import MESH_LEVELS
+from softhand.fem.solver import IndentationSettings, Status, indent
+
+S2D = dict(mode="2d")
+
+
+def _finite_monotone_ramp(r):
+    ramp = ~r.hold
+    assert np.all(np.isfinite(r.force_N)) and np.all(np.isfinite(r.displacement_mm))
+    assert np.all(np.diff(r.displacement_mm[ramp]) > 0)
+    assert np.all(np.diff(r.force_N[ramp]) > -1e-9)
+
+
+@pytest.mark.parametrize("name", ["sil", "pu"])
+def test_fast_ramp_then_hold_relaxes_like_the_prony_series(name):
+    """Plate at 1000 mm/s (a step), then hold: F(t)/F(0+) = g(t) within 0.5 % of F(0+)."""
+    r = indent(f"solid-{name}", IndentationSettings(speed_mm_s=1000.0, hold_s=60.0, **S2D))
+    _finite_monotone_ramp(r)
+    t0 = r.time_s[~r.hold][-1]
+    t = r.time_s[r.hold] - t0
+    ratio = r.force_N[r.hold] / r.force_N[~r.hold][-1]
+    g = material(name).prony.relaxation(t)
+    assert np.abs(ratio - g).max() < 5e-3
+    assert np.all(np.diff(r.force_N[r.hold]) < 1e-5)  # never rises beyond the Newton tolerance
+
+
+def test_long_pu_hold_reaches_the_long_term_elastic_state():
+    """PU, tau3 = 25 s, 300 s hold: final force = long-term elastic force at that depth (1 %)."""
+    r = indent("solid-pu", IndentationSettings(hold_s=300.0, **S2D))
+    _finite_monotone_ramp(r)
+    depth = r.displacement_mm[-1]
+    relaxed = indent("solid-pu", IndentationSettings(elastic_only=True, max_force_N=50.0,
+                                                     max_depth_mm=depth, **S2D))
+    assert relaxed.displacement_mm[-1] == pytest.approx(depth, abs=1e-9)
+    assert r.force_N[-1] == pytest.approx(relaxed.force_N[-1], rel=1e-2)
+    assert r.force_N[-1] < 0.75 * r.force_N[~r.hold][-1]
+
+
+def test_pocket_closes_under_20_newton_without_failure():
+    """pocket2-sil to 20 N: reaches the force, pocket contact closed, stiffening after closure."""
+    r = indent("pocket2-sil", IndentationSettings(max_force_N=20.0, hold_s=1.0, **S2D))
+    assert r.status is Status.REACHED_FORCE
+    _finite_monotone_ramp(r)
+    assert r.force_N[~r.hold][-1] >= 20.0
+    assert max(rec["pocket_points"] for rec in r.log) > 0
+    d02, d2, d20 = r.displacement_at(0.2), r.displacement_at(2.0), r.displacement_at(20.0)
+    assert d2 > 2.0  # the 2 mm pocket has closed before 2 N
+    open_stiffness = 0.2 / d02
+    closed_stiffness = 18.0 / (d20 - d2)
+    assert closed_stiffness > 10 * open_stiffness
+
+
+def test_plate_at_100_mm_per_s_is_stiffer_for_the_viscous_pu():
+    """100 mm/s vs 0.5 mm/s: finite, and PU needs less travel to reach 2 N (less relaxation)."""
+    fast = indent("pocket2-pu", IndentationSettings(speed_mm_s=100.0, hold_s=1.0, **S2D))
+    slow = indent("pocket2-pu", IndentationSettings(hold_s=0.0, **S2D))
+    _finite_monotone_ramp(fast)
+    assert fast.displacement_at(2.0) < slow.displacement_at(2.0)
+
+
+def test_alpha_to_zero_is_continuous_in_the_structure():
+    """SIL alpha1 = 0.001 vs 1e-9: displacement at 2 N agrees to 0.1 %."""
+    base = indent("solid-sil", IndentationSettings(**S2D, hold_s=0.0))
+    tiny = indent("solid-sil", IndentationSettings(
+        **S2D, hold_s=0.0, materials={"sil": {"alpha": [1e-9, 15.5]}}))
+    assert tiny.displacement_at(2.0) == pytest.approx(base.displacement_at(2.0), rel=1e-3)
+
+
+@pytest.mark.parametrize("design", ["solid-sil", "pocket2-sil"])
+def test_2d_mesh_convergence(design):
+    """2D: d(2 N) converges: fine -> 3x default changes < 1 %, and less than default -> fine.
+
+    Measured (2D): solid-sil default 0.6284, fine 0.6367, 3x 0.6376 mm; pocket2-sil 2.395,
+    2.445, 2.460 mm. The default mesh is 1.3 % / 2.1 % from the fine mesh: short of the 1 %
+    target, recorded in the benchmark report.
+    """
+    spec = MESH_LEVELS["default"]
+    d = {k: indent(design, IndentationSettings(mesh=m, hold_s=0.0, **S2D)).displacement_at(2.0)
+         for k, m in (("default", spec), ("fine", spec.refined(2)), ("x3", spec.refined(3)))}
+    assert abs(d["fine"] - d["x3"]) / d["x3"] < 0.01
+    assert abs(d["fine"] - d["x3"]) < abs(d["default"] - d["fine"])
+
+
+def test_result_bookkeeping_and_interpolation():
+    """Curve starts at 0, log has one record per step, interpolation hits the target force."""
+    r = indent("solid-pu", IndentationSettings(hold_s=2.0, **S2D))
+    assert r.time_s[0] == 0 and r.force_N[0] == 0
+    assert len(r.log) == len(r.time_s) - 1
+    assert r.force_N[~r.hold][-1] >= 2.0
+    d2 = r.displacement_at(2.0)
+    assert r.displacement_mm[~r.hold][-2] < d2 <= r.displacement_mm[~r.hold][-1]
+    assert r.force_at(d2) == pytest.approx(2.0, rel=1e-9)
+    assert r.force_at(10.0) is None
+    s = r.summary()
+    for key in ("design", "displacement_at_2N_mm", "force_at_2mm_N", "wall_s", "time_s",
+                "displacement_mm", "force_N"):
+        assert key in s
+    assert r.time_s[r.hold][-1] == pytest.approx(r.time_s[~r.hold][-1] + 2.0, abs=1e-9)
