@@ -1,0 +1,101 @@
+"""The command line: machine-readable output, files with provenance, and bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from softhand.cli import main
+
+FAST = ["--mode", "2d", "--hold", "0"]
+
+
+def run(args):
+    return CliRunner().invoke(main, args, catch_exceptions=False)
+
+
+def test_indent_json_has_the_contract_keys(tmp_path):
+    """--json prints design, d(2 N), F(2 mm), wall_s and the curve; --out writes CSV + summary."""
+    res = run(["fe", "indent", "solid-pu", *FAST, "--json", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    for key in ("design", "displacement_at_2N_mm", "force_at_2mm_N", "wall_s", "time_s",
+                "displacement_mm", "force_N"):
+        assert key in data
+    assert data["design"] == "solid-pu" and data["force_at_2mm_N"] is None
+    assert 0.2 < data["displacement_at_2N_mm"] < 0.6
+    assert len(data["time_s"]) == len(data["force_N"]) == len(data["displacement_mm"])
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    prov = summary["provenance"]
+    assert prov["solver_version"] and prov["git_revision"] and prov["mesh_sizes"]["solid-pu"]
+    assert (tmp_path / "solid-pu.csv").read_text().startswith("time_s,displacement_mm,force_N")
+
+
+def test_sweep_writes_curves_summary_and_plot(tmp_path):
+    """fe sweep on two designs: one CSV each, summary.json with the paper comparison, a PNG."""
+    res = run(["fe", "sweep", *FAST, "--design", "solid-sil", "--design", "solid-sil-pu",
+               "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert set(summary["designs"]) == {"solid-sil", "solid-sil-pu"}
+    assert "layered_change" in summary["comparison"]["solid-sil-pu"]
+    assert (tmp_path / "curves.png").stat().st_size > 10_000
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_export_writes_an_abaqus_deck(tmp_path):
+    """fe export writes a deck with the hyperfoam material."""
+    out = tmp_path / "deck.inp"
+    res = run(["fe", "export", "pocket2-sil", str(out), "--mesh", "coarse"])
+    assert res.exit_code == 0, res.output
+    assert "*HYPERFOAM" in out.read_text()
+
+
+def _materials(tmp_path, constants):
+    path = tmp_path / "mat.json"
+    path.write_text(json.dumps({"sil": constants}))
+    return ["--materials", str(path)]
+
+
+@pytest.mark.parametrize("extra,needle", [
+    (["--geometry", "pocket_height_mm=7"], "pocket_height_mm = 7.0"),
+    (["--geometry", "outer_layer_mm=9"], "outer_layer_mm = 9.0"),
+    (["--geometry", "nonsense=1"], "nonsense"),
+    (["--speed", "-1"], "speed_mm_s = -1.0"),
+])
+def test_bad_geometry_or_settings_names_the_value_and_writes_nothing(tmp_path, extra, needle):
+    """Exit status 2, the bad value in the message, no output folder."""
+    out = tmp_path / "out"
+    res = run(["fe", "indent", "pocket2-sil", *FAST, "--out", str(out), *extra])
+    assert res.exit_code == 2
+    assert needle in res.output
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("constants,needle", [
+    ({"nu": 0.5}, "nu = 0.5 is outside the allowed range (-1, 0.5)"),
+    ({"nu": -1.2}, "nu = -1.2"),
+    ({"mu_MPa": [0.0, 0.01]}, "mu (MPa)[0] = 0.0"),
+    ({"mu_MPa": [-0.08, 0.01]}, "mu (MPa)[0] = -0.08"),
+    ({"tau_s": [0.025, 0.0, 0.3]}, "tau (s)[1] = 0.0"),
+    ({"g": [0.5, 0.3, 0.2]}, "sum(g) = 1.0 must be < 1"),
+    ({"alpha": [0.0, 15.5]}, "alpha[0] = 0.0"),
+])
+def test_bad_material_constants_name_the_value_and_write_nothing(tmp_path, constants, needle):
+    """Each invalid constant: exit 2, message quotes it and the allowed range, no files."""
+    out = tmp_path / "out"
+    res = run(["fe", "indent", "solid-sil", *FAST, "--out", str(out),
+               *_materials(tmp_path, constants)])
+    assert res.exit_code == 2
+    assert needle in res.output
+    assert not out.exists()
+
+
+def test_unknown_design_lists_the_allowed_names(tmp_path):
+    """Unknown design: exit 2, the name and the 12 allowed designs in the message."""
+    res = run(["fe", "indent", "pocket3-sil", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    assert "'pocket3-sil'" in res.output and "pocket2-pu-sil" in res.output
+    assert not (tmp_path / "o").exists()
