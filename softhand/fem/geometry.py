@@ -57,8 +57,8 @@ class PhalanxGeometry:
         pocket_height_mm: 0 for the solid design, 1 or 2 for the paper's pockets.
         pocket_roof_mm: skin thickness above the pocket (unstated; default 1.2 mm: the 0.8 mm
             outer layer plus 0.4 mm of inner material, chosen so that pocket2-sil gives the
-            paper's 0.39 N at 2 mm (3D default mesh: 0.381 N). It is the one paper number used
-            to choose geometry; every other number is a prediction).
+            paper's 0.39 N at 2 mm (3D default mesh: 0.364 N; 2.0 mm gave 0.67 N). It is the one
+            paper number used to choose geometry; every other number is a prediction).
         pocket_half_width_mm: half the pocket's span across the finger (unstated; default 5.0 mm).
     """
 

@@ -30,7 +30,10 @@ class MeshSpec:
         n_top: elements from the pocket edge to the top centre (the contact zone).
         n_outer, n_roof, n_pocket, n_floor, n_core: elements through each band, outside in.
         n_length: elements along the half length (3D only).
-        top_grading: ratio of the first to the last element along ``n_top`` (< 1 refines the top).
+        top_grading: size ratio of the first (pocket edge) to the last (top centre) element
+            along ``n_top``; < 1 refines towards the pocket edge.
+        side_grading: size ratio of the first (base) to the last (pocket edge) element along
+            ``n_side``; > 1 refines towards the pocket edge.
     """
 
     n_side: int = 2
@@ -42,6 +45,7 @@ class MeshSpec:
     n_core: int = 2
     n_length: int = 3
     top_grading: float = 1.0
+    side_grading: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("n_side", "n_top", "n_outer", "n_roof", "n_pocket", "n_floor", "n_core",
@@ -54,7 +58,7 @@ class MeshSpec:
         """Every element count multiplied by ``factor``."""
         return MeshSpec(*(getattr(self, n) * factor for n in (
             "n_side", "n_top", "n_outer", "n_roof", "n_pocket", "n_floor", "n_core",
-            "n_length")), top_grading=self.top_grading)
+            "n_length")), top_grading=self.top_grading, side_grading=self.side_grading)
 
 
 MESH_LEVELS: dict[str, MeshSpec] = {
@@ -152,7 +156,7 @@ def _level_lines(geom: PhalanxGeometry, spec: MeshSpec):
 def _section(geom: PhalanxGeometry, spec: MeshSpec):
     """Node coordinates of the half section on the (level, theta) grid and element bands."""
     th_p = geom.pocket_edge_theta()
-    side = np.linspace(0.0, th_p, spec.n_side + 1)
+    side = th_p * _graded(spec.n_side, spec.side_grading)
     top = th_p + (0.5 * np.pi - th_p) * _graded(spec.n_top, spec.top_grading)
     theta = _with_midpoints(np.concatenate([side, top[1:]]))
     kinds, values, bands = _level_lines(geom, spec)

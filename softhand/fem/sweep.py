@@ -70,6 +70,11 @@ def compare_with_paper(summaries: dict[str, dict[str, Any]]) -> dict[str, Any]:
         if ref is not None and got is not None:
             row["force_at_2mm"] = {"paper": ref, "softhand": got,
                                    "error_pct": 100 * (got - ref) / ref}
+        ref = P["rising_slope_mm_per_N"].get(name)
+        got = s.get("rising_slope_mm_per_N")
+        if ref is not None and got is not None:
+            row["rising_slope"] = {"paper": ref, "softhand": got,
+                                   "error_pct": 100 * (got - ref) / ref}
         d = parse_design(name)
         homog = f"{d.topology}-{d.inner}"
         if not d.homogeneous and homog in summaries:
