@@ -82,9 +82,9 @@ def test_alpha_to_zero_is_continuous_in_the_structure():
 def test_2d_mesh_convergence(design):
     """2D: d(2 N) converges: fine -> 3x default changes < 1 %, and less than default -> fine.
 
-    Measured (2D): solid-sil default 0.6284, fine 0.6367, 3x 0.6376 mm; pocket2-sil 2.395,
-    2.445, 2.460 mm. The default mesh is 1.3 % / 2.1 % from the fine mesh: short of the 1 %
-    target, recorded in the benchmark report.
+    Measured (2D): solid-sil default 0.632, fine 0.636, 3x 0.638 mm; pocket2-sil 2.519, 2.558,
+    2.572 mm. pocket2-sil's default mesh is 1.5 % from the fine mesh: short of the 1 % target
+    (see reports/bench-fe.md for 3D).
     """
     spec = MESH_LEVELS["default"]
     d = {k: indent(design, IndentationSettings(mesh=m, hold_s=0.0, **S2D)).displacement_at(2.0)

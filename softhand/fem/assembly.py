@@ -121,9 +121,9 @@ class Assembler:
         Fd = F[..., :dim, :]  # rows i < dim: displacement components
         B = np.empty((ne, nq, 6, nn, dim))
         for v, (a, b) in enumerate(_VOIGT):
-            B[:, :, v] = np.einsum("eqi,eqn->eqni", Fd[..., a], G[..., b])
+            np.multiply(Fd[:, :, None, :, a], G[:, :, :, b, None], out=B[:, :, v])
             if a != b:
-                B[:, :, v] += np.einsum("eqi,eqn->eqni", Fd[..., b], G[..., a])
+                B[:, :, v] += Fd[:, :, None, :, b] * G[:, :, :, a, None]
         B = B.reshape(ne, nq, 6, nn * dim)
         w = self.wdet
         fe = np.einsum("eqvk,eqv->ek", B, S * w[..., None])
@@ -138,16 +138,9 @@ class Assembler:
         GS = np.einsum("eqna,eqab->eqnb", G, St)
         Kg = np.matmul(GS.transpose(0, 2, 1, 3).reshape(ne, nn, nq * 3),
                        G.transpose(0, 1, 3, 2).reshape(ne, nq * 3, nn))
-        Ke = Km + _kron_eye(Kg, dim)
-        data = np.bincount(self._scatter, weights=Ke.ravel(), minlength=self._nnz)
+        Kv = Km.reshape(ne, nn, dim, nn, dim)
+        for i in range(dim):  # geometric stiffness: the same node block on every component
+            Kv[:, :, i, :, i] += Kg
+        data = np.bincount(self._scatter, weights=Km.ravel(), minlength=self._nnz)
         K = sp.csr_matrix((data, self._cols, self._indptr), shape=(mesh.n_dofs, mesh.n_dofs))
         return f, K, ElementState(new_groups)
-
-
-def _kron_eye(Kg: np.ndarray, dim: int) -> np.ndarray:
-    """Expand (ne, nn, nn) node blocks to (ne, nn*dim, nn*dim) with the identity per block."""
-    ne, nn, _ = Kg.shape
-    out = np.zeros((ne, nn, dim, nn, dim))
-    for i in range(dim):
-        out[:, :, i, :, i] = Kg
-    return out.reshape(ne, nn * dim, nn * dim)
