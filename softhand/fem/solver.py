@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
@@ -426,8 +426,3 @@ def indent(
         wall_s=time.perf_counter() - t_start, n_dofs=model.mesh.n_dofs,
         n_elements=model.mesh.n_elements,
     )
-
-
-def with_settings(settings: IndentationSettings, **changes: Any) -> IndentationSettings:
-    """A copy of ``settings`` with fields replaced (validated again)."""
-    return replace(settings, **changes)
