@@ -100,7 +100,8 @@ class Assembler:
         ne, nn = mesh.elements.shape
         nq = self.n_qp
         F = self.deformation_gradient(u)
-        detF = np.linalg.det(F)
+        with np.errstate(over="ignore", invalid="ignore"):  # a wild Newton iterate is rejected
+            detF = np.linalg.det(F)
         if not np.all(detF > 0):
             raise ElementError(f"{int((detF <= 0).sum())} Gauss points have det F <= 0")
         S = np.empty((ne, nq, 6))

@@ -6,7 +6,9 @@ constant normal depth under the outer profile (floor, pocket, roof, outer layer)
 outer layer and the pocket have exactly their thickness everywhere. The 3D mesh extrudes the
 half section over half the length. Symmetry: x = 0 (both) and z = 0 (3D); the base y = 0 is fixed.
 
-Element counts per band are set by :class:`MeshSpec`; ``fine`` doubles every count of ``default``.
+Element counts per band are set by :class:`MeshSpec`; ``fine`` doubles every count of ``default``;
+``graded`` refines towards the pocket ends, where the closed pocket is a crack-like slit whose tips
+make uniform refinement converge only about linearly.
 """
 
 from __future__ import annotations
@@ -64,6 +66,10 @@ class MeshSpec:
 MESH_LEVELS: dict[str, MeshSpec] = {
     "coarse": MeshSpec(n_side=1, n_top=3, n_core=1, n_floor=1, n_length=2),
     "default": MeshSpec(),
+    # graded towards the pocket ends, where the closed pocket behaves like a crack tip: 1.6x the
+    # default's dofs, converged to < 1 % where the uniform default is not (see the benchmark)
+    "graded": MeshSpec(n_side=3, n_top=6, n_pocket=2, n_floor=2, top_grading=0.2,
+                       side_grading=5.0),
 }
 MESH_LEVELS["fine"] = MESH_LEVELS["default"].refined(2)
 

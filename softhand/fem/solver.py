@@ -275,7 +275,9 @@ class _Model:
             for _ in range(6):  # backtrack only if the update inverts an element
                 trial = u.copy()
                 trial[self.free] += step * du
-                if np.all(np.linalg.det(self.asm.deformation_gradient(trial)) > 0):
+                with np.errstate(over="ignore", invalid="ignore"):
+                    detF = np.linalg.det(self.asm.deformation_gradient(trial))
+                if np.all(detF > 0):
                     break
                 step *= 0.5
             u = trial
