@@ -64,9 +64,9 @@ def _settings(**kw: Any):
 
 
 _common_fe = [
-    click.option("--mesh", type=click.Choice(["coarse", "default", "graded", "fine"]),
+    click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),
                  default="default", show_default=True,
-                 help="Mesh: fine doubles every element count; graded refines the pocket ends."),
+                 help="Mesh: default is graded to the pocket ends; fine doubles every count."),
     click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d", show_default=True,
                  help="3D quarter model, or fast 2D plane-strain cross-section."),
     click.option("--elastic-only", is_flag=True, help="Hyperfoam only, no Prony relaxation."),

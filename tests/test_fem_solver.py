@@ -79,30 +79,25 @@ def test_alpha_to_zero_is_continuous_in_the_structure():
 
 
 @pytest.mark.parametrize("design", ["solid-sil", "pocket2-sil"])
-def test_2d_mesh_convergence(design):
-    """2D: d(2 N) converges: fine -> 3x default changes < 1 %, and less than default -> fine.
-
-    Measured (2D): solid-sil default 0.632, fine 0.636, 3x 0.638 mm; pocket2-sil 2.519, 2.558,
-    2.572 mm. pocket2-sil's default mesh is 1.5 % from the fine mesh: short of the 1 % target
-    (see reports/bench-fe.md for 3D).
-    """
-    spec = MESH_LEVELS["default"]
-    d = {k: indent(design, IndentationSettings(mesh=m, hold_s=0.0, **S2D)).displacement_at(2.0)
-         for k, m in (("default", spec), ("fine", spec.refined(2)), ("x3", spec.refined(3)))}
-    assert abs(d["fine"] - d["x3"]) / d["x3"] < 0.01
-    assert abs(d["fine"] - d["x3"]) < abs(d["default"] - d["fine"])
-
-
-@pytest.mark.parametrize("design", ["solid-sil", "pocket2-sil"])
-def test_2d_graded_mesh_converges_within_one_percent(design):
-    """2D: the graded mesh's d(2 N) changes < 1 % when every element count doubles.
-
-    Measured: solid-sil 0.6352 -> 0.6356 mm, pocket2-sil 2.5577 -> 2.5771 mm (-0.75 %).
-    """
-    spec = MESH_LEVELS["graded"]
+def test_2d_default_mesh_converges_within_one_percent(design):
+    """2D: d(2 N) changes < 1 % from the default mesh to the fine mesh (every count doubled)."""
     d = [indent(design, IndentationSettings(mesh=m, hold_s=0.0, **S2D)).displacement_at(2.0)
-         for m in (spec, spec.refined(2))]
+         for m in ("default", "fine")]
     assert abs(d[0] - d[1]) / d[1] < 0.01
+
+
+def test_2d_uniform_mesh_converges_slowly_near_the_closed_pocket():
+    """2D pocket2-sil on uniform meshes: O(h^p) with p < 1.5 (crack-like pocket ends).
+
+    Measured (roof 1.2 mm): 2.519, 2.558, 2.572 mm for 1x, 2x, 3x: the reason the default
+    mesh is graded towards the pocket ends.
+    """
+    spec = MESH_LEVELS["uniform"]
+    d = [indent("pocket2-sil", IndentationSettings(mesh=m, hold_s=0.0, **S2D)).displacement_at(2.0)
+         for m in (spec, spec.refined(2), spec.refined(3))]
+    ratio = (d[1] - d[0]) / (d[2] - d[1])  # 3.0 for p = 1, 4.0 for p = 1.5, 5.4 for p = 2
+    assert d[0] < d[1] < d[2]
+    assert ratio < 3.9
 
 
 def test_result_bookkeeping_and_interpolation():

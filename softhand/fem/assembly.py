@@ -113,7 +113,8 @@ class Assembler:
                 continue
             Fg = F[idx].reshape(-1, 3, 3)
             C = np.einsum("nki,nkj->nij", Fg, Fg)
-            Sg, Dg, h = mat.update(C, hist, dt)
+            with np.errstate(over="ignore", invalid="ignore"):  # checked below, not warned
+                Sg, Dg, h = mat.update(C, hist, dt)
             S[idx] = Sg.reshape(idx.size, nq, 6)
             D[idx] = Dg.reshape(idx.size, nq, 6, 6)
             new_groups.append(h)
