@@ -129,6 +129,7 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
             "git_revision": git_revision(),
             "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "settings": settings,
+            "mesh_spec": asdict(first.settings.mesh_spec),
             "mesh_sizes": {n: {"n_elements": r.n_elements, "n_dofs": r.n_dofs}
                            for n, r in results.items()},
             "curve_sha256": hashes,
