@@ -335,12 +335,17 @@ def indent(
     retries = 0
 
     def record(phase: str, it: int, hist: list[float], closed: tuple[int, int], inc: float):
+        """Log the accepted step and append its point to the curve."""
         nonlocal retries
         log.append({"step": len(log) + 1, "phase": phase, "time_s": t, "displacement_mm": d,
                     "force_N": F, "iterations": it, "residual_N": hist[-1] * model.scale,
                     "plate_points": closed[0], "pocket_points": closed[1], "increment": inc,
                     "retries": retries})
         retries = 0
+        times.append(t)
+        disps.append(d)
+        forces.append(F)
+        holds.append(phase == "hold")
 
     # --- ramp ----------------------------------------------------------------------------
     while True:
@@ -381,11 +386,7 @@ def indent(
         k_est = (F - F_prev) / (d - d_prev_val) if F_prev < F else k_est
         dd_prev = dd
         record("ramp", it, hist, closed, dd)
-        times.append(t)
-        disps.append(d)
-        forces.append(F)
-        holds.append(False)
-        dd = max(dd, dd_free) if dd < dd_free else dd  # a landing does not shrink the next step
+        dd = max(dd, dd_free)  # a landing does not shrink the next step
         dd *= 1.5 if it <= 4 else (1.0 if it <= 8 else 0.6)
         if progress:
             progress(0.8 * min(1.0, max(F / s.max_force_N, d / s.max_depth_mm)))
@@ -413,10 +414,6 @@ def indent(
             t += dt
             F = model.plate_force(u, d)
             record("hold", it, hist, closed, dt)
-            times.append(t)
-            disps.append(d)
-            forces.append(F)
-            holds.append(True)
             dt *= 1.6
             if progress:
                 progress(0.8 + 0.2 * (t - t0) / s.hold_s)
