@@ -172,7 +172,9 @@ def _print_result(s: dict[str, Any]) -> None:
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=str(DEFAULT_FE_DIR),
               show_default=True, help="Folder for curves, summary.json and curves.png.")
 @click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
-def fe_sweep(out_dir, designs, **kw) -> None:
+@click.option("--jobs", type=click.IntRange(min=1), default=None,
+              help="Designs run at once, one process each [default: CPU count].")
+def fe_sweep(out_dir, designs, jobs, **kw) -> None:
     """Indent all 12 designs and compare them with the paper."""
     from softhand.fem.geometry import DESIGNS, parse_design
     from softhand.fem.solver import ConvergenceError
@@ -186,7 +188,7 @@ def fe_sweep(out_dir, designs, **kw) -> None:
     except ValueError as exc:
         _fail(exc)
     try:
-        results = run_sweep(names, settings)
+        results = run_sweep(names, settings, jobs=jobs)
     except ConvergenceError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(3)

@@ -12,9 +12,12 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
+import multiprocessing
+import os
 import subprocess
 from collections.abc import Iterable
-from dataclasses import asdict
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, replace
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -94,18 +97,47 @@ def compare_with_paper(summaries: dict[str, dict[str, Any]]) -> dict[str, Any]:
 
 
 def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | None = None,
-              *, show_progress: bool = True) -> dict[str, IndentationResult]:
-    """Indent every design with the same settings; a progress bar counts designs."""
+              *, show_progress: bool = True, jobs: int | None = None) -> dict[str, IndentationResult]:
+    """Indent every design with the same settings; a progress bar counts designs.
+
+    Args:
+        jobs: designs run at once in separate processes, each single-threaded (None: CPU
+            count). The results do not depend on it; results come back in ``designs`` order.
+    """
     from tqdm import tqdm
 
     designs = [parse_design(d).name for d in designs]  # validate all names first
     settings = settings or IndentationSettings()
+    jobs = min(len(designs), jobs or os.cpu_count() or 1)
+    if jobs < 1:
+        raise ValueError(f"jobs = {jobs!r} must be >= 1")
+    bar = tqdm(total=len(designs), desc="fe sweep", unit="design", disable=not show_progress)
     results: dict[str, IndentationResult] = {}
-    bar = tqdm(designs, desc="fe sweep", unit="design", disable=not show_progress)
-    for name in bar:
-        bar.set_postfix_str(name)
-        results[name] = indent(name, settings)
-    return results
+    if jobs == 1:
+        for name in designs:
+            bar.set_postfix_str(name)
+            results[name] = indent(name, settings)
+            bar.update()
+    else:
+        one = replace(settings, threads=1)
+        # slowest first (pocket designs take longest) so that the workers finish together
+        order = sorted(designs, key=lambda n: parse_design(n).topology != "pocket2")
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=_single_threaded) as pool:
+            futures = {pool.submit(indent, name, one): name for name in order}
+            for fut in as_completed(futures):
+                results[futures[fut]] = replace(fut.result(), settings=settings)
+                bar.set_postfix_str(futures[fut])
+                bar.update()
+    bar.close()
+    return {name: results[name] for name in designs}
+
+
+def _single_threaded() -> None:
+    """Worker start-up: one BLAS thread, so that workers do not compete for the cores."""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
 
 
 def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
