@@ -1,0 +1,12 @@
+"""Skin laws: elastic force-indentation laws with quasi-linear viscoelastic relaxation.
+
+Second stage of the flow: fitted to the FE stage's curves (:mod:`softhand.fem`), read by the MuJoCo
+calibration (:mod:`softhand.skin`). Imports only :mod:`softhand.fem` data, never later stages.
+"""
+
+from softhand.laws.elastic import ElasticLaw
+from softhand.laws.fit import Curve, CurveError, SkinLaw, curve_errors, fit_skin_law, load_curve
+from softhand.laws.qlv import Prony, qlv_force
+
+__all__ = ["Curve", "CurveError", "ElasticLaw", "Prony", "SkinLaw", "curve_errors",
+           "fit_skin_law", "load_curve", "qlv_force"]

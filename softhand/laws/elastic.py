@@ -1,0 +1,134 @@
+r"""Elastic skin laws: a smooth, monotone force-indentation curve that is zero at zero.
+
+The law is written through its stiffness, a quadratic B-spline with non-negative coefficients,
+
+.. math::
+
+    F(\delta) = \int_0^\delta \sum_j c_j M_j(s)\,ds = \sum_j c_j I_j(\delta), \qquad c_j \ge 0,
+
+so that :math:`F(0) = 0`, :math:`F' \ge 0` (monotone) and :math:`F \in C^2` for every coefficient
+vector; the force is linear in :math:`c`, so a fit is a non-negative least-squares problem. Past the
+last knot the law continues with its end stiffness (a straight line); below zero it gives no force
+(a skin does not pull).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import BSpline
+
+__all__ = ["ElasticLaw", "basis_matrix", "knot_vector"]
+
+_DEGREE = 2  # stiffness degree; force is one degree higher
+
+
+def knot_vector(max_mm: float, n_basis: int) -> np.ndarray:
+    """Clamped knots on [0, max_mm] for ``n_basis`` quadratic stiffness splines (uniform)."""
+    if not np.isfinite(max_mm) or max_mm <= 0:
+        raise ValueError(f"max_mm = {max_mm!r} must be finite and > 0")
+    if n_basis < _DEGREE + 1:
+        raise ValueError(f"n_basis = {n_basis!r} must be >= {_DEGREE + 1}")
+    inner = np.linspace(0.0, max_mm, n_basis - _DEGREE + 1)
+    return np.concatenate([[0.0] * _DEGREE, inner, [max_mm] * _DEGREE])
+
+
+def basis_matrix(knots: np.ndarray, delta_mm: np.ndarray) -> np.ndarray:
+    """``I_j(delta)`` for every basis function (columns), with the linear continuation."""
+    knots = np.asarray(knots, dtype=float)
+    n = knots.size - _DEGREE - 1
+    eye = np.eye(n)
+    return np.stack([ElasticLaw(knots, eye[j]).force(delta_mm) for j in range(n)], axis=-1)
+
+
+@dataclass(frozen=True)
+class ElasticLaw:
+    """F(delta) in N for indentation delta in mm (see the module docstring).
+
+    Attributes:
+        knots: clamped knot vector of the quadratic stiffness spline (mm).
+        coefficients: non-negative stiffness coefficients (N/mm), one per basis function.
+    """
+
+    knots: np.ndarray
+    coefficients: np.ndarray
+
+    def __post_init__(self) -> None:
+        k = np.asarray(self.knots, dtype=float)
+        c = np.asarray(self.coefficients, dtype=float)
+        if k.ndim != 1 or c.ndim != 1 or k.size != c.size + _DEGREE + 1:
+            raise ValueError(f"{k.size} knots and {c.size} coefficients do not make a "
+                             f"degree-{_DEGREE} spline (need knots = coefficients + {_DEGREE + 1})")
+        if not (np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
+            raise ValueError("knots and coefficients must be finite")
+        if np.any(np.diff(k) < 0) or k[0] != 0.0:
+            raise ValueError(f"knots must start at 0 and not decrease, got {k.tolist()}")
+        if np.any(c < 0):
+            raise ValueError(f"coefficients must be >= 0 (a monotone law), got min {c.min():.3g}")
+        object.__setattr__(self, "knots", k)
+        object.__setattr__(self, "coefficients", c)
+        stiff = BSpline(k, c, _DEGREE, extrapolate=False)
+        object.__setattr__(self, "_stiffness", stiff)
+        object.__setattr__(self, "_force", stiff.antiderivative())
+
+    @property
+    def max_mm(self) -> float:
+        """End of the fitted range; beyond it the law is a straight line."""
+        return float(self.knots[-1])
+
+    def stiffness(self, delta_mm) -> np.ndarray:
+        """dF/d delta (N/mm)."""
+        d = np.clip(np.asarray(delta_mm, dtype=float), 0.0, self.max_mm)
+        k = np.nan_to_num(self._stiffness(d))
+        return np.where(np.asarray(delta_mm) < 0, 0.0, k)
+
+    def force(self, delta_mm) -> np.ndarray:
+        """F(delta) in N; 0 for delta <= 0, linear past :attr:`max_mm`."""
+        d = np.asarray(delta_mm, dtype=float)
+        inside = np.clip(d, 0.0, self.max_mm)
+        f = np.nan_to_num(self._force(inside))
+        beyond = np.maximum(d - self.max_mm, 0.0)
+        return np.where(d <= 0, 0.0, f + beyond * self.end_stiffness)
+
+    @property
+    def end_stiffness(self) -> float:
+        """Stiffness at the end of the fitted range (N/mm), used past it."""
+        return float(self.coefficients[-1])
+
+    def displacement_at(self, force_N: float) -> float:
+        """Indentation (mm) at which the law reaches ``force_N`` (> 0)."""
+        if not np.isfinite(force_N) or force_N <= 0:
+            raise ValueError(f"force_N = {force_N!r} must be finite and > 0")
+        f_end = float(self.force(self.max_mm))
+        if force_N >= f_end:
+            if self.end_stiffness <= 0:
+                raise ValueError(f"the law never reaches {force_N} N (at most {f_end:.4g} N)")
+            return self.max_mm + (force_N - f_end) / self.end_stiffness
+        lo, hi = 0.0, self.max_mm
+        for _ in range(60):  # bisection: the law is monotone
+            mid = 0.5 * (lo + hi)
+            if self.force(mid) < force_N:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    def to_dict(self) -> dict:
+        return {"knots_mm": self.knots.tolist(), "coefficients_N_per_mm": self.coefficients.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ElasticLaw:
+        return cls(np.asarray(d["knots_mm"]), np.asarray(d["coefficients_N_per_mm"]))
+
+    @classmethod
+    def fit(cls, delta_mm, force_N, *, n_basis: int = 10, max_mm: float | None = None
+            ) -> ElasticLaw:
+        """Least-squares monotone law through static points (no time dependence)."""
+        from scipy.optimize import nnls
+
+        d = np.asarray(delta_mm, dtype=float)
+        f = np.asarray(force_N, dtype=float)
+        knots = knot_vector(max_mm or float(d.max()), n_basis)
+        c, _ = nnls(basis_matrix(knots, d), f)
+        return cls(knots, c)

@@ -1,0 +1,181 @@
+r"""Skin pad with relaxation, from native MuJoCo elements (the ``soft-contact+relaxation`` level).
+
+The skin surface is a *pad* body on a slide joint along the skin's inward normal (coordinate
+:math:`x` = compression, m). Its elastic law is the QLV law's long-term part :math:`g_\infty F_e(x)`,
+a C2 cubic spline written as a truncated power series
+
+.. math::
+
+    F(x) = a x + b x^2 + c x^3 + \sum_k c_k (x - t_k)_+^3 \; - \;[\text{quadratic and cubic past } t_n]
+
+that MuJoCo evaluates natively: the joint's polynomial ``stiffness`` holds the first piece, and one
+fixed tendon per knot with a dead-band ``springlength = (-inf, t_k)`` and polynomial stiffness holds
+each further piece (the last one cancels the curvature, so the law continues as a straight line).
+
+Relaxation: one Maxwell branch per Prony term, a massless-like slide dof :math:`y_i` with joint
+damping :math:`c_i`, tied to the pad by a tendon :math:`x - y_i` carrying :math:`g_i F_e` (the same
+spline, scaled). Instantly the branches add :math:`\sum g_i F_e(x)`, so the pad gives the full
+instantaneous law; held, each branch relaxes with local time constant
+:math:`c_i / (g_i F_e'(x - y_i))`. :math:`c_i = \tau_i g_i F_e'(\delta_\text{ref})` makes it
+:math:`\tau_i` at the reference depth (the law's 2 N depth); away from it the relaxation time
+scales with the inverse stiffness (measured by ``softhand bench calibration``), while the amount
+relaxed is exact at every depth, unlike linear branch springs.
+
+The pad contacts the world through a stiff calibrated contact (:mod:`softhand.skin.soft_contact`,
+linear law) and needs the ``discrete`` integrator (light bodies, stiff springs). Units: SI.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from softhand.laws.elastic import ElasticLaw
+from softhand.laws.fit import SkinLaw
+
+__all__ = ["PadParams", "add_pad", "evaluate_pieces", "spline_pieces"]
+
+BRANCH_MASS_KG = 1e-5
+FAR_M = 1e3  # "minus infinity" for the lower end of a dead band
+
+
+def spline_pieces(law: ElasticLaw, scale: float = 1.0) -> list[tuple[float, float, float, float]]:
+    """(knot_m, a, b, c) in SI: ``scale * F(x) = sum a t + b t^2 + c t^3`` with ``t = (x - knot)_+``.
+
+    Exact for the law's cubic spline on [0, max] and its straight continuation past it.
+    """
+    knots = np.unique(law.knots)  # mm
+    force = law._force  # the cubic antiderivative spline
+    mids = 0.5 * (knots[:-1] + knots[1:])
+    d3 = np.array([float(force(m, 3)) for m in mids])  # constant on each interval
+    pieces = [(0.0, float(force(mids[0], 1) - force(mids[0], 2) * mids[0]
+                          + 0.5 * d3[0] * mids[0] ** 2),
+               float(force(mids[0], 2) - d3[0] * mids[0]) / 2, d3[0] / 6)]
+    for k in range(1, len(mids)):
+        pieces.append((float(knots[k]), 0.0, 0.0, (d3[k] - d3[k - 1]) / 6))
+    curv_end = float(force(mids[-1], 2) + d3[-1] * (knots[-1] - mids[-1]))
+    pieces.append((float(knots[-1]), 0.0, -curv_end / 2, -d3[-1] / 6))
+    return [(t * 1e-3, a * scale * 1e3, b * scale * 1e6, c * scale * 1e9)
+            for t, a, b, c in pieces]
+
+
+def evaluate_pieces(pieces: list[tuple[float, float, float, float]], x_m) -> np.ndarray:
+    """The force (N) of :func:`spline_pieces` at compression ``x_m`` (m), as MuJoCo computes it."""
+    x = np.asarray(x_m, dtype=float)
+    out = np.zeros_like(x)
+    for t0, a, b, c in pieces:
+        u = np.maximum(x - t0, 0.0) if t0 > 0 else x
+        out = out + a * u + b * u**2 + c * u**3
+    return out
+
+
+@dataclass(frozen=True)
+class PadParams:
+    """What the pad needs: the law, its contact, and the fitted branch damping.
+
+    Attributes:
+        law: the QLV skin law (elastic spline + Prony).
+        reference_mm: depth at which the branch time constants are exact before fitting (the
+            2 N depth).
+        contact_stiffness: stiffness of the pad's linear contact (N/m at any mass); its
+            compliance is taken out of the pad's spring so that pad + contact give the law.
+        max_compression_mm: joint limit (the bone under the skin).
+        damping_scale: per-branch multipliers of the analytic damping, fitted in the rig.
+        pad_mass_kg: mass of the pad body.
+    """
+
+    law: SkinLaw
+    reference_mm: float
+    contact_stiffness: float
+    max_compression_mm: float
+    damping_scale: tuple[float, ...] = ()
+    pad_mass_kg: float = 2e-3
+
+    def __post_init__(self) -> None:
+        for name in ("reference_mm", "contact_stiffness", "max_compression_mm", "pad_mass_kg"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v <= 0:
+                raise ValueError(f"{name} = {v!r} must be finite and > 0")
+        scale = tuple(float(x) for x in self.damping_scale) or (1.0,) * len(self.law.prony.g)
+        if len(scale) != len(self.law.prony.g) or any(not x > 0 for x in scale):
+            raise ValueError(f"damping_scale = {self.damping_scale!r}: one positive value per "
+                             f"Prony term ({len(self.law.prony.g)})")
+        object.__setattr__(self, "damping_scale", scale)
+
+    def branch_damping(self) -> list[float]:
+        """Joint damping c_i (N s/m) of each Maxwell branch."""
+        k_ref = float(self.law.elastic.stiffness(self.reference_mm)) * 1e3  # N/m
+        return [s * tau * g * k_ref for s, g, tau in
+                zip(self.damping_scale, self.law.prony.g, self.law.prony.tau_s, strict=True)]
+
+    def spring_law(self) -> ElasticLaw:
+        """The pad's instantaneous spring: the law with the contact's compliance taken out."""
+        e = self.law.elastic
+        top = e.max_mm
+        f = np.linspace(0.0, float(e.force(top)), 400)[1:]
+        x = np.array([e.displacement_at(v) for v in f]) - f / self.contact_stiffness * 1e3
+        if np.any(np.diff(x) <= 0) or x[0] <= 0:
+            raise ValueError(f"contact_stiffness = {self.contact_stiffness:.4g} N/m is not stiffer "
+                             "than the skin everywhere; raise it")
+        return ElasticLaw.fit(np.concatenate([[0.0], x]), np.concatenate([[0.0], f]),
+                              n_basis=e.coefficients.size + 4)
+
+    def to_dict(self) -> dict:
+        return {"reference_mm": self.reference_mm, "contact_stiffness_N_per_m": self.contact_stiffness,
+                "max_compression_mm": self.max_compression_mm,
+                "damping_scale": list(self.damping_scale), "pad_mass_kg": self.pad_mass_kg,
+                "branch_damping_Ns_per_m": self.branch_damping()}
+
+    @classmethod
+    def from_dict(cls, d: dict, law: SkinLaw) -> PadParams:
+        return cls(law, d["reference_mm"], d["contact_stiffness_N_per_m"],
+                   d["max_compression_mm"], tuple(d["damping_scale"]), d["pad_mass_kg"])
+
+
+def _spring(spec: mujoco.MjSpec, name: str, joint: str, other: str | None,
+            pieces: list[tuple[float, float, float, float]], first_on_joint: mujoco.MjsJoint | None
+            ) -> None:
+    """Add the spline as joint polynomial stiffness (first piece) and dead-band tendons."""
+    for k, (t, a, b, c) in enumerate(pieces):
+        if k == 0 and first_on_joint is not None:
+            first_on_joint.stiffness = [a, b, c]
+            continue
+        ten = spec.add_tendon(name=f"{name}_k{k}")
+        ten.wrap_joint(joint, 1.0)
+        if other is not None:
+            ten.wrap_joint(other, -1.0)
+        ten.springlength = [-FAR_M, t]
+        ten.stiffness = [a, b, c]
+
+
+def add_pad(spec: mujoco.MjSpec, bone: mujoco.MjsBody, name: str, params: PadParams, *,
+            normal=(0.0, 0.0, 1.0), pos=(0.0, 0.0, 0.0)) -> mujoco.MjsBody:
+    """Add a pad body under ``bone`` (slide along ``-normal`` = compression) and its branches.
+
+    Returns the pad body; the caller adds the skin geom to it.
+    """
+    axis = -np.asarray(normal, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    pad = bone.add_body(name=f"{name}_pad", pos=list(pos))
+    joint = pad.add_joint(name=f"{name}_pad", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(axis))
+    joint.range = [-1e-4, params.max_compression_mm * 1e-3]
+    joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+    joint.armature = 1e-5
+    law = params.law
+    spring = params.spring_law()
+    pad.mass = params.pad_mass_kg
+    pad.inertia = [1e-9, 1e-9, 1e-9]
+    pad.explicitinertial = True
+    _spring(spec, f"{name}_eq", joint.name, None, spline_pieces(spring, law.prony.g_inf), joint)
+    for i, (g, c) in enumerate(zip(law.prony.g, params.branch_damping(), strict=True)):
+        branch = bone.add_body(name=f"{name}_branch{i}", pos=list(pos))
+        bj = branch.add_joint(name=f"{name}_branch{i}", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                              axis=list(axis))
+        bj.damping = [c, 0.0, 0.0]
+        bj.armature = 1e-6
+        branch.mass = BRANCH_MASS_KG
+        branch.inertia = [1e-9, 1e-9, 1e-9]
+        _spring(spec, f"{name}_br{i}", joint.name, bj.name, spline_pieces(spring, g), None)
+    return pad

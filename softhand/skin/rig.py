@@ -1,0 +1,201 @@
+"""MuJoCo indentation rig: a rigid plate driven down onto one phalanx skin, like the FE and the paper.
+
+The plate (the paper's 20 x 10 mm brass indenter) is a mocap body: its descent is prescribed
+exactly. The phalanx skin is an ellipsoid (one contact point against any convex indenter, so the
+per-contact law is the skin's law) on a "bone" body that rides a vertical slide joint held by a
+load-cell spring: the bone's mass is the effective mass the contact sees (varied by the mass
+tests), and the spring is soft enough to be stable with any mass at the timestep. The rig records
+the indentation (plate descent minus bone descent: what the skin feels) and the normal contact
+force. The plate follows the *indentation* history asked for: each step it is placed at the target
+indentation plus the bone's current descent, so the load cell's give does not enter the curve
+(the paper's machine is displacement-controlled too). Any representation (:data:`REPRESENTATIONS`) of any
+calibrated skin runs in the same rig.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from softhand.skin.pad import PadParams, add_pad
+from softhand.skin.soft_contact import SoftContactParams
+
+__all__ = ["REPRESENTATIONS", "RigCurve", "RigSettings", "build_rig", "run_rig"]
+
+REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
+SKIN_HALF_AXES_M = (0.005, 0.008, 0.0045)  # phalanx: 10 mm long, 16 mm wide, skin top 4.5 mm up
+PLATE_HALF_M = (0.010, 0.005, 0.002)  # the paper's 20 x 10 mm indenter, 4 mm thick
+INTEGRATORS = ("discrete", "implicitfast", "euler")
+
+
+@dataclass(frozen=True)
+class RigSettings:
+    """Simulation settings of the rig.
+
+    Attributes:
+        timestep: s, in (0, 0.01].
+        mass_kg: mass of the pressed body (the effective mass the contact sees), > 0.
+        integrator: ``implicitfast``, ``discrete`` or ``euler``; None: the representation's own
+            (``discrete`` for pads, whose light bodies limit-cycle otherwise; else implicitfast).
+        load_cell_hz: natural frequency of the load cell (bone mass on its spring), Hz; None:
+            40 Hz under explicit-stiffness integrators, 300 Hz under ``discrete`` (implicit).
+    """
+
+    timestep: float = 1e-3
+    mass_kg: float = 0.2
+    integrator: str | None = None
+    load_cell_hz: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.timestep) and 0 < self.timestep <= 0.01):
+            raise ValueError(f"timestep = {self.timestep!r} s must be in (0, 0.01]")
+        if not (np.isfinite(self.mass_kg) and self.mass_kg > 0):
+            raise ValueError(f"mass_kg = {self.mass_kg!r} must be finite and > 0")
+        if self.integrator is not None and self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator = {self.integrator!r}: allowed {', '.join(INTEGRATORS)}")
+        if self.load_cell_hz is not None and not (np.isfinite(self.load_cell_hz)
+                                                  and self.load_cell_hz > 0):
+            raise ValueError(f"load_cell_hz = {self.load_cell_hz!r} must be finite and > 0")
+
+
+@dataclass(frozen=True)
+class RigCurve:
+    """What the rig measured (one sample per step)."""
+
+    representation: str
+    time_s: np.ndarray
+    displacement_mm: np.ndarray  # actual plate descent from first touch
+    force_N: np.ndarray  # normal contact force on the plate
+    wall_s: float  # time spent in mj_step only
+    steps: int
+
+    @property
+    def step_us(self) -> float:
+        return 1e6 * self.wall_s / max(self.steps, 1)
+
+
+def _check_representation(name: str) -> None:
+    if name not in REPRESENTATIONS:
+        raise ValueError(f"representation {name!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
+
+
+def build_rig(representation: str, *, soft: SoftContactParams | None = None,
+              pad: PadParams | None = None, settings: RigSettings = RigSettings()
+              ) -> mujoco.MjModel:
+    """Compile the rig for ``representation`` (``flex`` has its own rig in skin.flex)."""
+    _check_representation(representation)
+    if representation == "flex":
+        raise ValueError("the flex representation is built by softhand.skin.flex.build_flex_rig")
+    if representation == "soft-contact" and soft is None:
+        raise ValueError("soft-contact needs SoftContactParams (soft=...)")
+    if representation == "soft-contact+relaxation" and pad is None:
+        raise ValueError("soft-contact+relaxation needs PadParams (pad=...)")
+    spec = mujoco.MjSpec()
+    spec.option.timestep = settings.timestep
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    integrator = settings.integrator or default_integrator(representation)
+    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
+    bone = spec.worldbody.add_body(name="bone")
+    load_cell = bone.add_joint(name="load_cell", type=mujoco.mjtJoint.mjJNT_SLIDE,
+                               axis=[0.0, 0.0, -1.0])
+    hz = settings.load_cell_hz or (300.0 if integrator == "discrete" else 40.0)
+    w = 2 * np.pi * hz
+    load_cell.stiffness = [settings.mass_kg * w**2, 0.0, 0.0]
+    load_cell.damping = [2 * settings.mass_kg * w, 0.0, 0.0]
+    bone.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
+                  pos=[0, 0, -0.002], mass=settings.mass_kg, contype=0, conaffinity=0)
+    skin_body = bone
+    if representation == "soft-contact+relaxation":
+        skin_body = add_pad(spec, bone, "skin", pad)
+    skin_body.add_geom(name="skin", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+                       size=list(SKIN_HALF_AXES_M), contype=0, conaffinity=0, mass=0.0,
+                       rgba=[0.9, 0.7, 0.6, 1])
+    top = SKIN_HALF_AXES_M[2] + PLATE_HALF_M[2]
+    plate = spec.worldbody.add_body(name="plate", pos=[0.0, 0.0, top], mocap=True)
+    plate.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(PLATE_HALF_M),
+                   contype=0, conaffinity=0)
+    pair = spec.add_pair(name="skin_plate", geomname1="skin", geomname2="plate", condim=3)
+    if representation == "rigid":
+        pair.solref = [0.02, 1.0]  # MuJoCo's defaults: stock contact
+        pair.solimp = [0.9, 0.95, 0.001, 0.5, 2.0]
+    model = spec.compile()
+    if representation == "soft-contact":
+        apply_pair_law(model, "skin_plate", soft)
+    elif representation == "soft-contact+relaxation":
+        apply_pair_law(model, "skin_plate", pad_contact(pad))
+    return model
+
+
+def default_integrator(representation: str) -> str:
+    """``discrete`` for pads (light bodies limit-cycle under implicitfast), else implicitfast."""
+    return "discrete" if representation == "soft-contact+relaxation" else "implicitfast"
+
+
+def pad_contact(pad: PadParams) -> SoftContactParams:
+    """The stiff, linear contact that presses a pad (constant impedance, critically damped)."""
+    d = 0.3
+    k = pad.contact_stiffness * (1 - d)  # F = k r / (1 - d) at constant impedance
+    damping = 2.0 * np.sqrt(pad.contact_stiffness * pad.pad_mass_kg) * (1 - d)
+    return SoftContactParams(k, damping, (d, d, 1e-3, 0.5, 1.0))
+
+
+def pair_inverse_inertia(model: mujoco.MjModel, pair_id: int) -> float:
+    """The compiler's inverse inertia of a pair's two bodies (what ``efc_diagA`` uses)."""
+    b1 = model.geom_bodyid[model.pair_geom1[pair_id]]
+    b2 = model.geom_bodyid[model.pair_geom2[pair_id]]
+    return float(model.body_invweight0[b1, 0] + model.body_invweight0[b2, 0])
+
+
+def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactParams) -> None:
+    """Write ``params`` into a compiled pair, scaled by the pair's inverse inertia."""
+    pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
+    if pid < 0:
+        raise ValueError(f"pair {pair!r} is not in the model")
+    model.pair_solref[pid] = params.solref(pair_inverse_inertia(model, pid))
+    model.pair_solimp[pid] = params.solimp
+
+
+def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> float:
+    """Sum of normal contact forces on the plate geom (N)."""
+    total = 0.0
+    for i in range(data.ncon):
+        c = data.contact[i]
+        if c.geom1 == plate_geom or c.geom2 == plate_geom:
+            total += float(data.efc_force[c.efc_address])
+    return total
+
+
+def run_rig(model: mujoco.MjModel, time_s, displacement_mm, *, representation: str = "",
+            settings: RigSettings = RigSettings()) -> RigCurve:
+    """Drive the plate along ``displacement_mm(time_s)`` (linear in between) and record it."""
+    t_cmd = np.asarray(time_s, dtype=float)
+    d_cmd = np.asarray(displacement_mm, dtype=float)
+    if t_cmd.shape != d_cmd.shape or t_cmd.ndim != 1 or t_cmd.size < 2:
+        raise ValueError("time_s and displacement_mm must be 1-D arrays of the same length >= 2")
+    if not (np.all(np.isfinite(t_cmd)) and np.all(np.isfinite(d_cmd))):
+        raise ValueError("time_s and displacement_mm must be finite")
+    data = mujoco.MjData(model)
+    dt = model.opt.timestep
+    n = int(np.floor((t_cmd[-1] - t_cmd[0]) / dt + 1e-9))
+    plate_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "plate")
+    bone_q = model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "load_cell")]
+    z0 = float(model.body_pos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "plate"), 2])
+    times = t_cmd[0] + dt * np.arange(n + 1)
+    target_mm = np.interp(times, t_cmd, d_cmd)
+    disp = np.empty(n + 1)
+    force = np.empty(n + 1)
+    disp[0], force[0] = target_mm[0], 0.0
+    wall = 0.0
+    for k in range(1, n + 1):
+        plate_mm = target_mm[k] + 1e3 * data.qpos[bone_q]
+        data.mocap_pos[0, 2] = z0 - 1e-3 * plate_mm
+        t0 = time.perf_counter()
+        mujoco.mj_step(model, data)
+        wall += time.perf_counter() - t0
+        disp[k] = plate_mm - 1e3 * data.qpos[bone_q]
+        force[k] = plate_force(model, data, plate_geom)
+    return RigCurve(representation, times, disp, force, wall, n)

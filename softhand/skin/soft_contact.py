@@ -1,0 +1,153 @@
+r"""Calibrated soft contact: a skin's force law written into MuJoCo's solref/solimp.
+
+At rest, one contact row with direct-format ``solref = (-S, -B)`` and ``solimp = (d0, dw, width,
+mid, power)`` carries (MuJoCo's constraint model, :math:`\hat A` = the row's approximate inverse
+inertia ``efc_diagA``, frozen at ``qpos0``):
+
+.. math::
+
+    F(r) = \frac{S}{\hat A}\,\frac{d(r)^2}{d_w^2\,(1 - d(r))}\,r
+         + \frac{B}{\hat A}\,\frac{d(r)}{d_w\,(1 - d(r))}\,\dot r
+
+where :math:`d(r)` is the impedance sigmoid. So the same (S, B) gives a different force on a
+different body; writing :math:`S = \hat S \hat A` and :math:`B = \hat B \hat A` per contact pair
+makes the law independent of the bodies' masses and of the hand's posture (:math:`\hat A` is
+``body_invweight0[b1, 0] + body_invweight0[b2, 0]``, computed by the compiler). This module fits
+:math:`(\hat S, d_0, d_w, \text{width}, \text{mid}, \text{power})` to a force-indentation curve and
+writes the pair parameters. The impedance stays :math:`d \le 0.3` so that the contact remains a force
+law rather than a motion constraint (DESIGN.md, "Into MuJoCo"). Units: SI inside MuJoCo (m, N);
+the fit takes mm and N like the FE curves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+__all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
+
+D_MAX = 0.3  # largest impedance allowed: beyond it the contact acts as a motion constraint
+D_MIN = 1e-4  # MuJoCo's mjMINIMP
+MAX_POWER = 20.0  # steepest impedance sigmoid the fit may use
+
+
+def impedance(r_m, solimp) -> np.ndarray:
+    """MuJoCo's impedance d(r) for penetration ``r_m`` (m, >= 0) and ``solimp`` (5 values)."""
+    d0, dw, width, mid, power = (float(x) for x in solimp)
+    x = np.clip(np.abs(np.asarray(r_m, dtype=float)) / width, 0.0, 1.0)
+    if power == 1:
+        y = x
+    else:
+        y = np.where(x <= mid, x**power / mid ** (power - 1),
+                     1 - (1 - x) ** power / (1 - mid) ** (power - 1))
+    return d0 + y * (dw - d0)
+
+
+@dataclass(frozen=True)
+class SoftContactParams:
+    """Mass-normalised soft-contact parameters of one skin.
+
+    Attributes:
+        stiffness: :math:`\\hat S`, N/m per unit inverse inertia (solref[0] = -stiffness * A).
+        damping: :math:`\\hat B`, N s/m per unit inverse inertia (solref[1] = -damping * A).
+        solimp: (d0, dw, width_m, midpoint, power).
+    """
+
+    stiffness: float
+    damping: float
+    solimp: tuple[float, float, float, float, float]
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.stiffness) or self.stiffness <= 0:
+            raise ValueError(f"stiffness = {self.stiffness!r} must be finite and > 0")
+        if not np.isfinite(self.damping) or self.damping < 0:
+            raise ValueError(f"damping = {self.damping!r} must be finite and >= 0")
+        if len(self.solimp) != 5:
+            raise ValueError(f"solimp = {self.solimp!r} must have 5 values")
+        d0, dw, width, mid, power = (float(x) for x in self.solimp)
+        if not D_MIN <= d0 <= dw <= D_MAX:
+            raise ValueError(f"solimp d0 = {d0:.4g}, dw = {dw:.4g}: need {D_MIN} <= d0 <= dw "
+                             f"<= {D_MAX}")
+        if not width > 0:
+            raise ValueError(f"solimp width = {width!r} must be > 0 (m)")
+        if not 0 < mid < 1:
+            raise ValueError(f"solimp midpoint = {mid!r} must be in (0, 1)")
+        if not power >= 1:
+            raise ValueError(f"solimp power = {power!r} must be >= 1")
+        object.__setattr__(self, "solimp", (d0, dw, width, mid, power))
+
+    def force(self, r_mm, rate_mm_s=0.0) -> np.ndarray:
+        """Contact force (N) at penetration ``r_mm`` (and penetration rate), any body masses."""
+        r = np.maximum(np.asarray(r_mm, dtype=float), 0.0) * 1e-3
+        d = impedance(r, self.solimp)
+        dw = self.solimp[1]
+        f = (self.stiffness * d**2 / dw**2 * r
+             + self.damping * d / dw * np.asarray(rate_mm_s, dtype=float) * 1e-3) / (1 - d)
+        return np.where(r > 0, f, 0.0)
+
+    def solref(self, inv_inertia: float) -> tuple[float, float]:
+        """Direct-format solref for a contact pair whose ``efc_diagA`` is ``inv_inertia``."""
+        if not np.isfinite(inv_inertia) or inv_inertia <= 0:
+            raise ValueError(f"inv_inertia = {inv_inertia!r} must be finite and > 0")
+        return (-self.stiffness * inv_inertia, -self.damping * inv_inertia)
+
+    def to_dict(self) -> dict:
+        return {"stiffness_N_per_m_per_invmass": self.stiffness,
+                "damping_Ns_per_m_per_invmass": self.damping, "solimp": list(self.solimp)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> SoftContactParams:
+        return cls(d["stiffness_N_per_m_per_invmass"], d["damping_Ns_per_m_per_invmass"],
+                   tuple(d["solimp"]))
+
+
+def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
+                     reference_mass_kg: float = 0.02) -> tuple[SoftContactParams, float]:
+    """Fit the rest law F(r) to a force-indentation curve; return params and RMS error (N).
+
+    The damping is set, not fitted: ``damping_ratio`` of critical for ``reference_mass_kg`` on the
+    law's end stiffness (N s/m at full impedance; it adds ``damping * rate`` to the force).
+    """
+    d = np.asarray(delta_mm, dtype=float)
+    f = np.asarray(force_N, dtype=float)
+    if d.shape != f.shape or d.ndim != 1 or d.size < 5:
+        raise ValueError("delta_mm and force_N must be 1-D arrays of the same length >= 5")
+    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(f))):
+        raise ValueError("delta_mm and force_N must be finite")
+    keep = d > 0
+    d, f = d[keep], f[keep]
+    top = float(d.max()) * 1e-3
+    secant_end = float(f[-1] / d[-1]) * 1e3  # N/m
+
+    # bounded physical parameters: log stiffness, dw, d0 / dw, width / top, midpoint, power
+    lower = np.array([np.log(secant_end) - 8, 0.02, 1e-3, 0.05, 0.05, 1.0])
+    upper = np.array([np.log(secant_end) + 8, D_MAX, 1.0, 3.0, 0.95, MAX_POWER])
+
+    def unpack(p):
+        dw = float(p[1])
+        d0 = max(D_MIN, float(p[2]) * dw)
+        return float(np.exp(p[0])), (d0, dw, float(p[3]) * top, float(p[4]), float(p[5]))
+
+    def model(p, r_m):
+        s, si = unpack(p)
+        dd = impedance(r_m, si)
+        return s * dd**2 / si[1] ** 2 * r_m / (1 - dd)
+
+    r = d * 1e-3
+    best = None
+    starts = [(dw0, mid0, pw0) for dw0 in (0.05, 0.3) for mid0 in (0.2, 0.45, 0.7, 0.9)
+              for pw0 in (1.5, 4.0, 10.0)]  # the sigmoid's shape is not convex to fit
+    for dw0, mid0, pw0 in starts:
+        x0 = np.array([np.log(secant_end), dw0, 0.3, 1.0, mid0, pw0])
+        res = least_squares(lambda p: model(p, r) - f, x0, bounds=(lower, upper),
+                            method="trf", max_nfev=2000, xtol=1e-12, ftol=1e-12)
+        if best is None or res.cost < best.cost:
+            best = res
+    stiffness, solimp = unpack(best.x)
+    k_end = float(np.gradient(model(best.x, r), r)[-1])
+    damping = 2 * damping_ratio * np.sqrt(max(k_end, 1e-9) * reference_mass_kg) * (1 - solimp[1])
+    params = SoftContactParams(float(stiffness), float(damping), tuple(float(x) for x in solimp))
+    rms = float(np.sqrt(np.mean((params.force(d) - f) ** 2)))
+    return params, rms
