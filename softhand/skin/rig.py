@@ -41,7 +41,7 @@ class RigSettings:
         integrator: ``implicitfast``, ``discrete`` or ``euler``; None: the representation's own
             (``discrete`` for pads, whose light bodies limit-cycle otherwise; else implicitfast).
         load_cell_hz: natural frequency of the load cell (bone mass on its spring), Hz; None:
-            40 Hz under explicit-stiffness integrators, 300 Hz under ``discrete`` (implicit).
+            100 Hz under explicit-stiffness integrators, 300 Hz under ``discrete`` (implicit).
     """
 
     timestep: float = 1e-3
@@ -102,7 +102,7 @@ def build_rig(representation: str, *, soft: SoftContactParams | None = None,
     bone = spec.worldbody.add_body(name="bone")
     load_cell = bone.add_joint(name="load_cell", type=mujoco.mjtJoint.mjJNT_SLIDE,
                                axis=[0.0, 0.0, -1.0])
-    hz = settings.load_cell_hz or (300.0 if integrator == "discrete" else 40.0)
+    hz = settings.load_cell_hz or (300.0 if integrator == "discrete" else 100.0)
     w = 2 * np.pi * hz
     load_cell.stiffness = [settings.mass_kg * w**2, 0.0, 0.0]
     load_cell.damping = [2 * settings.mass_kg * w, 0.0, 0.0]

@@ -108,7 +108,9 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
     """Fit the rest law F(r) to a force-indentation curve; return params and RMS error (N).
 
     The damping is set, not fitted: ``damping_ratio`` of critical for ``reference_mass_kg`` on the
-    law's end stiffness (N s/m at full impedance; it adds ``damping * rate`` to the force).
+    law's end stiffness (N s/m at full impedance; it adds ``damping * rate`` to the force). Use the
+    lightest body the skin will touch: contact damping is explicit under ``implicitfast``, so a
+    damping set for a heavier body makes a light one unstable.
     """
     d = np.asarray(delta_mm, dtype=float)
     f = np.asarray(force_N, dtype=float)

@@ -1,0 +1,268 @@
+"""Calibrate every MuJoCo representation of a skin against its FE curves, and ship the result.
+
+For one design (or a reference skin):
+
+1. the law: elastic spline + Prony QLV fitted to the FE ramp-and-hold at 0.5 mm/s and at a faster
+   ramp (5 mm/s, when ``calibration/fe/speed-5`` holds it), validated on 2 mm/s (``speed-2``);
+2. ``soft-contact``: solref/solimp fitted to the 0.5 mm/s loading curve (closed-form rest law),
+   then checked in the rig at the calibration mass and at 0.01x and 100x that mass;
+3. ``soft-contact+relaxation``: the pad's branch damping fitted by least squares against simulated
+   indentations in the rig (ramp and hold), then the same checks;
+4. ``rigid``: stock contact in the same rig, as the baseline.
+
+Error measures (all in the rig at timestep 1 ms unless told otherwise):
+
+* ``rms_error_pct_of_2N`` / ``max_error_pct_of_2N``: force error over the 0.5 mm/s loading ramp,
+  % of 2 N, at the same indentation;
+* ``relaxation_error_pct``: largest force error in the hold, % of the force at the start of the hold;
+* ``mass_sensitivity_pct``: largest RMS difference (% of 2 N) between the loading curves at 0.01x
+  and 100x the calibration mass and the curve at the calibration mass.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from scipy.optimize import least_squares
+
+from softhand import __version__
+from softhand.laws.fit import Curve, SkinLaw, fit_skin_law, load_curve
+from softhand.skin.pad import PadParams
+from softhand.skin.rig import RigSettings, build_rig, run_rig
+from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
+
+__all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
+           "calibrate_design", "fe_curves"]
+
+FORMAT_VERSION = 1
+CALIBRATION_MASS_KG = 0.2  # a hand segment; the mass tests use 0.01x (2 g) and 100x (20 kg)
+MASS_FACTORS = (0.01, 100.0)
+PAD_CONTACT_FACTOR = 300.0  # pad contact stiffness / the skin's largest tangent stiffness
+
+
+def fe_curves(design: str, fe_dir: str | Path) -> tuple[list[Curve], list[Curve]]:
+    """FE curves to fit (0.5 mm/s, and 5 mm/s if present) and to validate on (2 mm/s)."""
+    root = Path(fe_dir)
+    main = root / f"{design}.csv"
+    if not main.exists():
+        raise FileNotFoundError(f"no FE curve for {design!r} at {main}: run `softhand fe sweep`")
+    fit = [load_curve(main, f"{design}@0.5mm/s")]
+    fast = root / "speed-5" / f"{design}.csv"
+    if fast.exists():
+        fit.append(load_curve(fast, f"{design}@5mm/s"))
+    val = root / "speed-2" / f"{design}.csv"
+    return fit, [load_curve(val, f"{design}@2mm/s")] if val.exists() else []
+
+
+@dataclass(frozen=True)
+class RepresentationResult:
+    """One representation of one skin: parameters, errors and cost."""
+
+    representation: str
+    params: dict[str, Any]
+    rms_error_pct_of_2N: float
+    max_error_pct_of_2N: float
+    mass_sensitivity_pct: float | None
+    relaxation_error_pct: float | None
+    step_us: float
+    fit_s: float
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"representation": self.representation, "params": self.params,
+                "rms_error_pct_of_2N": self.rms_error_pct_of_2N,
+                "max_error_pct_of_2N": self.max_error_pct_of_2N,
+                "mass_sensitivity_pct": self.mass_sensitivity_pct,
+                "relaxation_error_pct": self.relaxation_error_pct, "step_us": self.step_us,
+                "fit_s": self.fit_s, **self.extra}
+
+
+@dataclass(frozen=True)
+class SkinCalibration:
+    """Everything the hand needs for one skin, with provenance."""
+
+    design: str
+    law: SkinLaw
+    representations: dict[str, RepresentationResult]
+    provenance: dict[str, Any]
+
+    @property
+    def soft_contact(self) -> SoftContactParams:
+        return SoftContactParams.from_dict(self.representations["soft-contact"].params)
+
+    @property
+    def pad(self) -> PadParams:
+        return PadParams.from_dict(self.representations["soft-contact+relaxation"].params,
+                                   self.law)
+
+    def to_dict(self) -> dict:
+        return {"format_version": FORMAT_VERSION, "design": self.design,
+                "law": self.law.to_dict(),
+                "representations": {k: v.to_dict() for k, v in self.representations.items()},
+                "provenance": self.provenance}
+
+    @classmethod
+    def from_dict(cls, d: dict, *, source: str = "calibration") -> SkinCalibration:
+        version = d.get("format_version")
+        if version != FORMAT_VERSION:
+            raise ValueError(f"{source}: format_version {version!r} is not {FORMAT_VERSION} "
+                             "(written by another softhand version): run `softhand calibrate`")
+        try:
+            law = SkinLaw.from_dict(d["law"])
+            reps = {}
+            for name, r in d["representations"].items():
+                keys = {"representation", "params", "rms_error_pct_of_2N", "max_error_pct_of_2N",
+                        "mass_sensitivity_pct", "relaxation_error_pct", "step_us", "fit_s"}
+                reps[name] = RepresentationResult(**{k: r[k] for k in keys},
+                                                  extra={k: v for k, v in r.items()
+                                                         if k not in keys})
+            return cls(d["design"], law, reps, d.get("provenance", {}))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"{source}: malformed calibration ({type(exc).__name__}: {exc})"
+                             ) from None
+
+
+def _ramp(curve: Curve) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    i = curve.peak_index
+    return curve.time_s[:i + 1], curve.displacement_mm[:i + 1], curve.force_N[:i + 1]
+
+
+def _loading_error(out, curve: Curve) -> tuple[float, float]:
+    """RMS and max error (% of 2 N) over the loading ramp, at the rig's actual indentation."""
+    t_end = curve.time_s[curve.peak_index]
+    ramp = out.time_s <= t_end + 1e-12
+    _, d, f = _ramp(curve)
+    err = out.force_N[ramp] - np.interp(out.displacement_mm[ramp], d, f)
+    return float(100 * np.sqrt(np.mean(err**2)) / 2.0), float(100 * np.abs(err).max() / 2.0)
+
+
+def _hold_error(out, curve: Curve) -> float | None:
+    if not curve.hold.any():
+        return None
+    t_end = curve.time_s[curve.peak_index]
+    hold = out.time_s > t_end + 1e-12
+    err = out.force_N[hold] - np.interp(out.time_s[hold], curve.time_s, curve.force_N)
+    return float(100 * np.abs(err).max() / curve.force_N[curve.peak_index])
+
+
+def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings, **params) -> float:
+    """Largest RMS difference (% of 2 N) of the loading curve when the mass changes 100x."""
+    t, d, _ = _ramp(curve)
+    runs = {}
+    for factor in (1.0, *MASS_FACTORS):
+        st = RigSettings(timestep=settings.timestep, mass_kg=settings.mass_kg * factor,
+                         integrator=settings.integrator)
+        out = run_rig(build_rig(representation, settings=st, **params), t, d, settings=st)
+        runs[factor] = out
+    ref = runs[1.0]
+    worst = 0.0
+    for factor in MASS_FACTORS:
+        f = np.interp(ref.displacement_mm, runs[factor].displacement_mm, runs[factor].force_N)
+        worst = max(worst, float(100 * np.sqrt(np.mean((f - ref.force_N) ** 2)) / 2.0))
+    return worst
+
+
+def _pad_params(law: SkinLaw, scale: tuple[float, ...] = ()) -> PadParams:
+    e = law.elastic
+    kmax = float(e.stiffness(np.linspace(0.0, e.max_mm, 400)).max()) * 1e3
+    ref = e.displacement_at(2.0) if float(e.force(e.max_mm)) >= 2.0 else e.max_mm
+    return PadParams(law, ref, PAD_CONTACT_FACTOR * kmax, max_compression_mm=3.0 * e.max_mm,
+                     damping_scale=scale)
+
+
+def _fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings) -> tuple[PadParams, int]:
+    """Branch damping multipliers by least squares against simulated indentations."""
+    n = len(law.prony.g)
+    if n == 0:
+        return _pad_params(law), 0
+    grid = np.linspace(curve.time_s[0], curve.time_s[-1], 400)
+    target = np.interp(grid, curve.time_s, curve.force_N)
+    evals = 0
+
+    def residual(logs: np.ndarray) -> np.ndarray:
+        nonlocal evals
+        evals += 1
+        pad = _pad_params(law, tuple(np.exp(logs)))
+        out = run_rig(build_rig("soft-contact+relaxation", pad=pad, settings=settings),
+                      curve.time_s, curve.displacement_mm, settings=settings)
+        return np.interp(grid, out.time_s, out.force_N) - target
+
+    res = least_squares(residual, np.zeros(n), bounds=(np.full(n, -3.0), np.full(n, 3.0)),
+                        diff_step=0.05, xtol=1e-3, ftol=1e-4, max_nfev=8)
+    return _pad_params(law, tuple(np.exp(res.x))), evals
+
+
+def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
+                     representations: tuple[str, ...] = ("rigid", "soft-contact",
+                                                         "soft-contact+relaxation"),
+                     settings: RigSettings | None = None,
+                     law: SkinLaw | None = None, curves: list[Curve] | None = None
+                     ) -> SkinCalibration:
+    """Fit the law and every asked representation of ``design``; see the module docstring.
+
+    ``law`` and ``curves`` replace the FE files (reference skins, tests with synthetic data).
+    ``settings`` default: the rig at 1 ms with the calibration mass.
+    """
+    settings = settings or RigSettings(mass_kg=CALIBRATION_MASS_KG)
+    if curves is None:
+        fit_curves, val_curves = fe_curves(design, fe_dir)
+    else:
+        fit_curves, val_curves = list(curves), []
+    t0 = time.perf_counter()
+    if law is None:
+        law = fit_skin_law(design, fit_curves, validation=val_curves)
+    law_s = time.perf_counter() - t0
+    main = fit_curves[0]
+    results: dict[str, RepresentationResult] = {}
+    for rep in representations:
+        t0 = time.perf_counter()
+        extra: dict[str, Any] = {}
+        if rep == "rigid":
+            params: dict[str, Any] = {"solref": [0.02, 1.0], "solimp": [0.9, 0.95, 0.001, 0.5, 2]}
+            kw: dict[str, Any] = {}
+        elif rep == "soft-contact":
+            _, d, f = _ramp(main)
+            soft, rms_n = fit_soft_contact(d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
+            params, kw = soft.to_dict(), {"soft": soft}
+            extra["closed_form_rms_pct_of_2N"] = 100 * rms_n / 2.0
+        elif rep == "soft-contact+relaxation":
+            pad, evals = _fit_pad(law, main, settings)
+            params, kw = pad.to_dict(), {"pad": pad}
+            extra["rig_simulations"] = evals
+        elif rep == "flex":
+            from softhand.skin.flex import fit_flex
+
+            _, d, f = _ramp(main)
+            fit = fit_flex(d, f, speed_mm_s=main.speed_mm_s)
+            results[rep] = _flex_result(fit, time.perf_counter() - t0)
+            continue
+        else:
+            raise ValueError(f"representation {rep!r} is unknown")
+        fit_s = time.perf_counter() - t0
+        out = run_rig(build_rig(rep, settings=settings, **kw), main.time_s, main.displacement_mm,
+                      settings=settings)
+        rms, mx = _loading_error(out, main)
+        relax = _hold_error(out, main) if rep == "soft-contact+relaxation" else None
+        sens = None if rep == "rigid" else _mass_sensitivity(rep, main, settings, **kw)
+        results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.step_us, fit_s,
+                                            extra)
+    provenance = {
+        "softhand_version": __version__, "mujoco_version": mujoco.__version__,
+        "fe_curves": {c.label: c.sha256 for c in fit_curves + val_curves},
+        "rig": {"timestep_s": settings.timestep, "mass_kg": settings.mass_kg,
+                "mass_factors": list(MASS_FACTORS)},
+        "law_fit_s": law_s,
+    }
+    return SkinCalibration(design, law, results, provenance)
+
+
+def _flex_result(fit, fit_s: float) -> RepresentationResult:
+    params = {k: v for k, v in fit.params.__dict__.items()}
+    return RepresentationResult("flex", params, float(fit.rms_error_pct_of_2N),
+                                float(fit.max_error_pct_of_2N), None, None,
+                                float(getattr(fit, "step_us", float("nan"))), fit_s)
