@@ -3,7 +3,9 @@
 ``softhand fe indent DESIGN``   one FE indentation (``--json`` for machine-readable output)
 ``softhand fe sweep``           all 12 designs, curves + summary + plot into calibration/fe
 ``softhand fe export DESIGN``   an Abaqus input deck of the same model
+``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
 ``softhand bench fe``           speed against error of the FE stage, written to a report
+``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 
 Bad input exits with status 2 and one line that names the value and the allowed range; nothing
 is written then.
@@ -216,6 +218,45 @@ def fe_export(design, out, fmt, **kw) -> None:
     click.echo(f"wrote {path}")
 
 
+@main.command("calibrate")
+@click.argument("skins", nargs=-1)
+@click.option("--representation", "representations", multiple=True,
+              help="rigid, soft-contact, soft-contact+relaxation or flex (repeatable) "
+                   "[default: all but flex].")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder for the calibration files [default: calibration/skins].")
+@click.option("--fe-dir", type=click.Path(file_okay=False), default=None,
+              help="Folder with the FE curves [default: calibration/fe].")
+@click.option("--jobs", type=click.IntRange(min=1), default=None,
+              help="Skins calibrated at once, one process each [default: CPU count].")
+@click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
+def calibrate(skins, representations, out_dir, fe_dir, jobs, as_json) -> None:
+    """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
+    from softhand.skin.calibrate import skin_names
+    from softhand.skin.rig import REPRESENTATIONS
+    from softhand.skin.run import calibrate_many, summary_table
+
+    names = list(skins) or skin_names()
+    for n in names:
+        if n not in skin_names():
+            _fail(ValueError(f"skin {n!r} is unknown; allowed: {', '.join(skin_names())}"))
+    reps = tuple(representations) or ("rigid", "soft-contact", "soft-contact+relaxation")
+    for r in reps:
+        if r not in REPRESENTATIONS:
+            _fail(ValueError(f"representation {r!r} is unknown; allowed: "
+                             f"{', '.join(REPRESENTATIONS)}"))
+    try:
+        result = calibrate_many(names, reps, out_dir=out_dir, fe_dir=fe_dir, jobs=jobs,
+                                show_progress=not as_json)
+    except (FileNotFoundError, ValueError) as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(3)
+    if as_json:
+        click.echo(json.dumps(result, indent=1))
+    else:
+        click.echo(summary_table(result))
+
+
 @main.group()
 def bench() -> None:
     """Benchmarks: speed against error, written to a report (never run as tests)."""
@@ -230,6 +271,23 @@ def bench_fe(out_dir, quick) -> None:
     from softhand.fem.bench import run_fe_benchmark
 
     report = run_fe_benchmark(out_dir, quick=quick)
+    click.echo(report)
+
+
+@bench.command("calibration")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              default="reports", show_default=True,
+              help="Folder for bench-calibration.md/json/png.")
+@click.option("--skin", "skins", multiple=True, help="Skins to measure (repeatable) "
+              "[default: every shipped skin].")
+def bench_calibration(out_dir, skins) -> None:
+    """Each representation's error against FE and cost per step relative to rigid, one run."""
+    from softhand.skin.bench import run_calibration_benchmark
+
+    try:
+        report = run_calibration_benchmark(out_dir, skins=list(skins) or None)
+    except ValueError as exc:
+        _fail(exc)
     click.echo(report)
 
 

@@ -37,7 +37,7 @@ from softhand.skin.rig import RigSettings, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
 __all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
-           "calibrate_design", "fe_curves"]
+           "calibrate_design", "calibrate_skin", "fe_curves", "law_curve", "skin_names"]
 
 FORMAT_VERSION = 1
 CALIBRATION_MASS_KG = 0.2  # a hand segment; the mass tests use 0.01x (2 g) and 100x (20 kg)
@@ -247,7 +247,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         out = run_rig(build_rig(rep, settings=settings, **kw), main.time_s, main.displacement_mm,
                       settings=settings)
         rms, mx = _loading_error(out, main)
-        relax = _hold_error(out, main) if rep == "soft-contact+relaxation" else None
+        relax = _hold_error(out, main)
         sens = None if rep == "rigid" else _mass_sensitivity(rep, main, settings, **kw)
         results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.step_us, fit_s,
                                             extra)
@@ -259,6 +259,42 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         "law_fit_s": law_s,
     }
     return SkinCalibration(design, law, results, provenance)
+
+
+def law_curve(law: SkinLaw, *, speed_mm_s: float = 0.5, force_N: float = 2.0,
+              hold_s: float = 10.0, n: int = 400) -> Curve:
+    """A ramp-to-``force_N``-and-hold record made from a law (for skins without FE curves)."""
+    depth = law.quasi_static_displacement_at(force_N, speed_mm_s)
+    t_ramp = depth / speed_mm_s
+    t = np.concatenate([np.linspace(0.0, t_ramp, n), t_ramp + np.geomspace(0.01, hold_s, n // 2)])
+    d = np.minimum(t * speed_mm_s, depth)
+    hold = t > t_ramp
+    return Curve(t, d, law.force(t, d), hold, label=f"{law.name}@{speed_mm_s}mm/s")
+
+
+def skin_names() -> list[str]:
+    """Every skin that ``softhand calibrate`` knows: the 12 designs and the two references."""
+    from softhand.fem.geometry import DESIGNS
+    from softhand.laws.references import HUMAN, PROSTHETIC
+
+    return [*DESIGNS, HUMAN, PROSTHETIC]
+
+
+def calibrate_skin(name: str, *, fe_dir: str | Path = "calibration/fe",
+                   representations: tuple[str, ...] = ("rigid", "soft-contact",
+                                                       "soft-contact+relaxation"),
+                   settings: RigSettings | None = None) -> SkinCalibration:
+    """Calibrate a design from its FE curves, or a reference skin from its paper-based law."""
+    from softhand.laws.references import HUMAN, PROSTHETIC, reference_law
+
+    if name in (HUMAN, PROSTHETIC):
+        law = reference_law(name)
+        return calibrate_design(name, representations=representations, settings=settings,
+                                law=law, curves=[law_curve(law)])
+    if name not in skin_names():
+        raise ValueError(f"skin {name!r} is unknown; allowed: {', '.join(skin_names())}")
+    return calibrate_design(name, fe_dir=fe_dir, representations=representations,
+                            settings=settings)
 
 
 def _flex_result(fit, fit_s: float) -> RepresentationResult:

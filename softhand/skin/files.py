@@ -1,0 +1,49 @@
+"""Shipped skin calibration: one JSON file per skin in ``calibration/skins``, written atomically.
+
+The hand and the handshake read these files (no FE run needed). Each file holds the law, every
+calibrated representation with its errors, and provenance (FE curve hashes, MuJoCo and softhand
+versions); ``index.json`` holds the summary table and the lifelike ranking.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from softhand.io import atomic_write_json
+from softhand.skin.calibrate import SkinCalibration
+
+__all__ = ["SHIPPED_DIR", "load_calibration", "save_calibration", "shipped_skins"]
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+SHIPPED_DIR = REPO_ROOT / "calibration" / "skins"
+FE_DIR = REPO_ROOT / "calibration" / "fe"
+
+
+def save_calibration(cal: SkinCalibration, out_dir: str | Path = SHIPPED_DIR) -> Path:
+    """Write ``{design}.json`` atomically; return its path."""
+    path = Path(out_dir) / f"{cal.design}.json"
+    atomic_write_json(path, cal.to_dict())
+    return path
+
+
+def load_calibration(design: str, directory: str | Path = SHIPPED_DIR) -> SkinCalibration:
+    """Read one skin's calibration; clear errors for a missing, corrupt or foreign file."""
+    path = Path(directory) / f"{design}.json"
+    if not path.exists():
+        known = ", ".join(shipped_skins(directory)) or "none"
+        raise ValueError(f"no calibration for skin {design!r} in {directory} (calibrated: {known});"
+                         " run `softhand calibrate`")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable calibration file ({exc})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: not a calibration file (top level is {type(data).__name__})")
+    return SkinCalibration.from_dict(data, source=str(path))
+
+
+def shipped_skins(directory: str | Path = SHIPPED_DIR) -> list[str]:
+    """Names of the skins calibrated in ``directory``."""
+    d = Path(directory)
+    return sorted(p.stem for p in d.glob("*.json") if p.stem != "index") if d.exists() else []
