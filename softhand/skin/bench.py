@@ -87,16 +87,16 @@ def _aggregate(rows: dict[str, dict[str, Any]]) -> dict[str, Any]:
     for row in rows.values():
         for rep, r in row.items():
             reps.setdefault(rep, []).append(r)
-    agg = {}
-    for rep, rs in reps.items():
-        def stat(key, fn):
-            vals = [r[key] for r in rs if r.get(key) is not None and np.isfinite(r[key])]
-            return float(fn(vals)) if vals else None
-        agg[rep] = {"worst_rms_pct": stat("rms_pct", np.max), "median_rms_pct": stat("rms_pct", np.median),
-                    "worst_hold_pct": stat("hold_pct", np.max),
-                    "median_cost_vs_rigid": stat("cost_vs_rigid", np.median),
-                    "median_step_us": stat("step_us", np.median), "skins": len(rs)}
-    return agg
+    def stat(rs: list[dict[str, Any]], key: str, fn) -> float | None:
+        vals = [r[key] for r in rs if r.get(key) is not None and np.isfinite(r[key])]
+        return float(fn(vals)) if vals else None
+
+    return {rep: {"worst_rms_pct": stat(rs, "rms_pct", np.max),
+                  "median_rms_pct": stat(rs, "rms_pct", np.median),
+                  "worst_hold_pct": stat(rs, "hold_pct", np.max),
+                  "median_cost_vs_rigid": stat(rs, "cost_vs_rigid", np.median),
+                  "median_step_us": stat(rs, "step_us", np.median), "skins": len(rs)}
+            for rep, rs in reps.items()}
 
 
 def _fmt(v, spec=".2f") -> str:

@@ -26,7 +26,7 @@ softens in strong compression (E = 0.7 MPa: 15 N at 3.5 mm, 10 N at 4 mm). SNH s
 
 Measured (2 cores shared with another job; default mesh 2 x 12 x 3 cells = 432 tetrahedra,
 117 free nodes, 352 dofs; timestep 1 ms): ``mj_step`` costs 1.4-1.6 ms against 5 us for the same
-plate on a rigid box, a cost ratio of 230-300 (:func:`flex_cost_ratio`; SNH ~320; a 1 x 6 x 2
+plate on a rigid box, a cost ratio of 230-305 (:func:`flex_cost_ratio`; SNH ~320; a 1 x 6 x 2
 mesh ~40). Fits (``fit_flex``, young only, poisson 0.3, from 0.5 MPa): young, RMS and max error in
 % of 2 N, simulations, seconds:
 
@@ -63,7 +63,11 @@ _CONTACT_STEPS = 2.0  # contact solref time constant in timesteps; 1 chatters (o
 
 
 def _check(name: str, value: float, lo: float, hi: float) -> None:
-    if not (lo <= value <= hi) or not np.isfinite(value):
+    try:
+        ok = lo <= float(value) <= hi  # False for NaN
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
         raise ValueError(f"{name}={value!r} is outside the allowed range [{lo}, {hi}]")
 
 
@@ -163,6 +167,7 @@ class FlexFit:
         wall_s: wall time of the fit, s.
         force_sim_N: fitted model's force at the target displacements.
         success: whether the optimiser reported convergence.
+        step_us: mean wall time of one ``mj_step`` over the fit's simulations, microseconds.
     """
 
     params: FlexPadParams
@@ -172,6 +177,7 @@ class FlexFit:
     wall_s: float
     force_sim_N: np.ndarray = field(repr=False)
     success: bool
+    step_us: float
 
 
 def _pad_mesh(p: FlexPadParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -300,14 +306,15 @@ def _run_ramp(model: mujoco.MjModel, *, speed_mm_s: float, depth_mm: float,
         f, pen = plate_force(model, data)
         t[s], delta[s], force[s] = data.time, -data.qpos[qadr] * 1e3, f
         pen_max = max(pen_max, pen)
-        if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not np.isfinite(data.qpos).all():
+        bad = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+        if bad or not np.isfinite(data.qpos).all():
             raise FloatingPointError(f"flex ramp diverged at step {s} (t = {data.time:.4f} s, "
                                      f"timestep {h}, delta {delta[s - 1] if s else 0:.3f} mm)")
         if max_force_N is not None and f >= max_force_N:
             break
     return FlexCurve(t_s=t[:steps], delta_mm=delta[:steps], force_N=force[:steps],
-                     wall_s=time.perf_counter() - t0,
-                     n_steps=steps, step_wall_s=t_step, max_penetration_mm=pen_max * 1e3,
+                     wall_s=time.perf_counter() - t0, n_steps=steps, step_wall_s=t_step,
+                     max_penetration_mm=pen_max * 1e3,
                      n_warnings=int(sum(w.number for w in data.warning)))
 
 
@@ -375,6 +382,7 @@ def fit_flex(delta_mm, force_N, *, speed_mm_s: float = 0.5, seed: int = 0,
     _check("young_guess_Pa", e0, 1e3, 1e9)
     depth = float(d_t.max()) + 0.05
     cache: dict[tuple[float, ...], np.ndarray] = {}
+    step_s: list[float] = []
 
     def params_of(x: np.ndarray) -> FlexPadParams:
         young = float(np.clip(x[0] * e0, 1e3, 1e9))
@@ -386,6 +394,7 @@ def fit_flex(delta_mm, force_N, *, speed_mm_s: float = 0.5, seed: int = 0,
             curve = simulate_flex_indentation(params_of(x), speed_mm_s=speed_mm_s,
                                               depth_mm=depth, timestep=timestep)
             cache[key] = curve.force_at(d_t)
+            step_s.append(curve.step_wall_s / curve.n_steps)
         return (cache[key] - f_t) / 2.0
 
     # young is unbounded (clipped in params_of): a bound makes the trust region crawl towards it
@@ -399,7 +408,7 @@ def fit_flex(delta_mm, force_N, *, speed_mm_s: float = 0.5, seed: int = 0,
     return FlexFit(params=params_of(sol.x), rms_error_pct_of_2N=float(np.sqrt(np.mean(err**2))),
                    max_error_pct_of_2N=float(np.abs(err).max()), n_simulations=len(cache),
                    wall_s=time.perf_counter() - t0, force_sim_N=res * 2.0 + f_t,
-                   success=bool(sol.success))
+                   success=bool(sol.success), step_us=1e6 * float(np.mean(step_s)))
 
 
 def flex_cost_ratio(params: FlexPadParams | None = None, *, timestep: float = 1e-3,
@@ -407,7 +416,7 @@ def flex_cost_ratio(params: FlexPadParams | None = None, *, timestep: float = 1e
     """Wall time per step of the flex rig over a rigid plate pressing a rigid box, same timestep.
 
     Same plate, servo, ramp and ``discrete`` integrator; the rigid pad is a fixed box of the pad's
-    bounding size. Only ``mj_step`` is timed. Returns ``(ratio, flex_s_per_step, rigid_s_per_step)``.
+    bounding size. Only ``mj_step`` is timed. Returns ``(ratio, flex_s_step, rigid_s_step)``.
     """
     params = FlexPadParams() if params is None else params
     flex = _run_ramp(build_flex_rig(params, timestep=timestep), speed_mm_s=speed_mm_s,

@@ -27,6 +27,7 @@ __all__ = ["REPRESENTATIONS", "RigCurve", "RigSettings", "build_rig", "run_rig"]
 
 REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
 SKIN_HALF_AXES_M = (0.005, 0.008, 0.0045)  # phalanx: 10 mm long, 16 mm wide, skin top 4.5 mm up
+BONE_DEPTH_M = 0.0045  # the rigid bone's top lies this far under the skin's top: a hard stop
 PLATE_HALF_M = (0.010, 0.005, 0.002)  # the paper's 20 x 10 mm indenter, 4 mm thick
 INTEGRATORS = ("discrete", "implicitfast", "euler")
 
@@ -57,8 +58,9 @@ class RigSettings:
         if self.integrator is not None and self.integrator not in INTEGRATORS:
             raise ValueError(f"integrator = {self.integrator!r}: allowed {', '.join(INTEGRATORS)}")
         if self.load_cell_hz is not None and not (np.isfinite(self.load_cell_hz)
-                                                  and self.load_cell_hz > 0):
-            raise ValueError(f"load_cell_hz = {self.load_cell_hz!r} must be finite and > 0")
+                                                  and self.load_cell_hz >= 0):
+            raise ValueError(f"load_cell_hz = {self.load_cell_hz!r} must be finite and >= 0 "
+                             "(0: a free indenter, for impact and dead-weight tests)")
 
 
 @dataclass(frozen=True)
@@ -102,12 +104,15 @@ def build_rig(representation: str, *, soft: SoftContactParams | None = None,
     bone = spec.worldbody.add_body(name="bone")
     load_cell = bone.add_joint(name="load_cell", type=mujoco.mjtJoint.mjJNT_SLIDE,
                                axis=[0.0, 0.0, -1.0])
-    hz = settings.load_cell_hz or (300.0 if integrator == "discrete" else 100.0)
+    hz = settings.load_cell_hz
+    if hz is None:
+        hz = 300.0 if integrator == "discrete" else 100.0
     w = 2 * np.pi * hz
     load_cell.stiffness = [settings.mass_kg * w**2, 0.0, 0.0]
     load_cell.damping = [2 * settings.mass_kg * w, 0.0, 0.0]
     bone.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
-                  pos=[0, 0, -0.002], mass=settings.mass_kg, contype=0, conaffinity=0)
+                  pos=[0, 0, SKIN_HALF_AXES_M[2] - BONE_DEPTH_M - 0.001], mass=settings.mass_kg,
+                  contype=0, conaffinity=0)
     skin_body = bone
     if representation == "soft-contact+relaxation":
         skin_body = add_pad(spec, bone, "skin", pad)
@@ -118,6 +123,8 @@ def build_rig(representation: str, *, soft: SoftContactParams | None = None,
     plate = spec.worldbody.add_body(name="plate", pos=[0.0, 0.0, top], mocap=True)
     plate.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(PLATE_HALF_M),
                    contype=0, conaffinity=0)
+    stop = spec.add_pair(name="bone_plate", geomname1="bone", geomname2="plate", condim=3)
+    stop.solref = [2 * settings.timestep, 1.0]  # the stiffest critically damped stop the step allows
     pair = spec.add_pair(name="skin_plate", geomname1="skin", geomname2="plate", condim=3)
     if representation == "rigid":
         pair.solref = [0.02, 1.0]  # MuJoCo's defaults: stock contact
@@ -150,13 +157,42 @@ def pair_inverse_inertia(model: mujoco.MjModel, pair_id: int) -> float:
     return float(model.body_invweight0[b1, 0] + model.body_invweight0[b2, 0])
 
 
+class SkinRangeWarning(UserWarning):
+    """A skin is used outside the range its calibration was checked in."""
+
+
+CHECKED_TIMESTEPS_S = (0.5e-3, 2e-3)  # the calibration is tested at 0.5, 1 and 2 ms
+
+
 def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactParams) -> None:
-    """Write ``params`` into a compiled pair, scaled by the pair's inverse inertia."""
+    """Write ``params`` into a compiled pair, scaled by the pair's inverse inertia.
+
+    Warns (:class:`SkinRangeWarning`) when the timestep is outside the checked range, or when the
+    skin's stiffest point on the pair's effective mass oscillates faster than an explicit
+    constraint update can follow (omega * timestep > 1; ``discrete`` integrates it implicitly).
+    """
+    import warnings
+
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     if pid < 0:
         raise ValueError(f"pair {pair!r} is not in the model")
-    model.pair_solref[pid] = params.solref(pair_inverse_inertia(model, pid))
+    inv = pair_inverse_inertia(model, pid)
+    model.pair_solref[pid] = params.solref(inv)
     model.pair_solimp[pid] = params.solimp
+    h = float(model.opt.timestep)
+    name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
+    if not CHECKED_TIMESTEPS_S[0] <= h <= CHECKED_TIMESTEPS_S[1]:
+        warnings.warn(f"pair {name!r}: timestep {h * 1e3:g} ms is outside the calibrated range "
+                      f"{CHECKED_TIMESTEPS_S[0] * 1e3:g}-{CHECKED_TIMESTEPS_S[1] * 1e3:g} ms",
+                      SkinRangeWarning, stacklevel=2)
+    omega = float(np.sqrt(params.end_stiffness * inv))
+    explicit = model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE
+    if explicit and omega * h > 1.0:
+        warnings.warn(f"pair {name!r}: skin stiffness {params.end_stiffness:.3g} N/m on effective "
+                      f"mass {1 / inv:.3g} kg oscillates at {omega:.3g} rad/s; omega * timestep = "
+                      f"{omega * h:.2f} > 1 is outside the calibrated range (unstable): use a "
+                      f"timestep below {1e3 / omega:.3g} ms or a heavier body",
+                      SkinRangeWarning, stacklevel=2)
 
 
 def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> float:

@@ -87,6 +87,11 @@ class SoftContactParams:
              + self.damping * d / dw * np.asarray(rate_mm_s, dtype=float) * 1e-3) / (1 - d)
         return np.where(r > 0, f, 0.0)
 
+    @property
+    def end_stiffness(self) -> float:
+        """Stiffness (N/m) once the impedance is full: the law's stiffest straight part."""
+        return self.stiffness / (1 - self.solimp[1])
+
     def solref(self, inv_inertia: float) -> tuple[float, float]:
         """Direct-format solref for a contact pair whose ``efc_diagA`` is ``inv_inertia``."""
         if not np.isfinite(inv_inertia) or inv_inertia <= 0:
