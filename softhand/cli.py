@@ -222,7 +222,7 @@ def fe_export(design, out, fmt, **kw) -> None:
 @click.argument("skins", nargs=-1)
 @click.option("--representation", "representations", multiple=True,
               help="rigid, soft-contact, soft-contact+relaxation or flex (repeatable) "
-                   "[default: all but flex].")
+                   "[default: all four].")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
               help="Folder for the calibration files [default: calibration/skins].")
 @click.option("--fe-dir", type=click.Path(file_okay=False), default=None,
@@ -240,7 +240,7 @@ def calibrate(skins, representations, out_dir, fe_dir, jobs, as_json) -> None:
     for n in names:
         if n not in skin_names():
             _fail(ValueError(f"skin {n!r} is unknown; allowed: {', '.join(skin_names())}"))
-    reps = tuple(representations) or ("rigid", "soft-contact", "soft-contact+relaxation")
+    reps = tuple(representations) or REPRESENTATIONS
     for r in reps:
         if r not in REPRESENTATIONS:
             _fail(ValueError(f"representation {r!r} is unknown; allowed: "

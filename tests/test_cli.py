@@ -100,3 +100,29 @@ def test_unknown_design_lists_the_allowed_names(tmp_path):
     assert res.exit_code == 2
     assert "'pocket3-sil'" in res.output and "pocket2-pu-sil" in res.output
     assert not (tmp_path / "o").exists()
+
+
+def test_calibrate_json_reports_the_contract_metrics_and_writes_files(tmp_path):
+    """calibrate --json: per skin and representation the four error numbers; files + index."""
+    res = run(["calibrate", "prosthetic-102l", "--representation", "soft-contact",
+               "--representation", "rigid", "--out", str(tmp_path), "--jobs", "1", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    soft = data["skins"]["prosthetic-102l"]["soft-contact"]
+    for key in ("rms_error_pct_of_2N", "max_error_pct_of_2N", "mass_sensitivity_pct",
+                "relaxation_error_pct"):
+        assert key in soft
+    assert soft["rms_error_pct_of_2N"] < 1.0 and soft["mass_sensitivity_pct"] < 2.0
+    saved = json.loads((tmp_path / "prosthetic-102l.json").read_text())
+    assert saved["provenance"]["mujoco_version"] and saved["format_version"] == 1
+    assert json.loads((tmp_path / "index.json").read_text())["lifelike"]
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["calibrate", "pocket3-sil"], "skin 'pocket3-sil' is unknown"),
+    (["calibrate", "solid-pu", "--representation", "jelly"], "representation 'jelly' is unknown"),
+])
+def test_calibrate_bad_input_names_the_value(tmp_path, args, needle):
+    res = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
+    assert res.exit_code == 2 and needle in res.output
+    assert not any(tmp_path.iterdir())

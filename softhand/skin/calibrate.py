@@ -298,7 +298,8 @@ def calibrate_skin(name: str, *, fe_dir: str | Path = "calibration/fe",
 
 
 def _flex_result(fit, fit_s: float) -> RepresentationResult:
-    params = {k: v for k, v in fit.params.__dict__.items()}
-    return RepresentationResult("flex", params, float(fit.rms_error_pct_of_2N),
-                                float(fit.max_error_pct_of_2N), None, None,
-                                float(getattr(fit, "step_us", float("nan"))), fit_s)
+    from dataclasses import asdict
+
+    return RepresentationResult("flex", asdict(fit.params), float(fit.rms_error_pct_of_2N),
+                                float(fit.max_error_pct_of_2N), None, None, float(fit.step_us),
+                                fit_s, {"rig_simulations": int(fit.n_simulations)})
