@@ -21,3 +21,14 @@ def test_fe_indent_example(capsys):
     assert out["pocket2-sil"]["displacement_at_2N_mm"] > 2.0
     assert out["solid-sil"]["displacement_at_2N_mm"] < 1.0
     assert "pocket2-sil" in capsys.readouterr().out
+
+
+def test_skin_in_mujoco_example(capsys):
+    """Calibrated skins give the FE force within 3 % of 2 N; rigid contact is far off."""
+    out = _load("skin_in_mujoco").main("pocket2-sil")
+    for rep in ("soft-contact", "soft-contact+relaxation"):
+        for key in ("F_1mm", "F_2mm"):
+            assert abs(out[rep][key] - out["FE"][key]) < 0.06
+    assert abs(out["soft-contact+relaxation"]["F_end"] - out["FE"]["F_end"]) < 0.1
+    assert out["rigid"]["F_1mm"] > 10 * out["FE"]["F_1mm"]
+    assert "soft-contact" in capsys.readouterr().out

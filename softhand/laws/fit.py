@@ -19,9 +19,23 @@ from scipy.optimize import least_squares, nnls
 from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector
 from softhand.laws.qlv import Prony, qlv_force, qlv_response_matrix
 
-__all__ = ["Curve", "CurveError", "SkinLaw", "curve_errors", "fit_skin_law", "load_curve"]
+__all__ = ["Curve", "CurveError", "SkinLaw", "curve_errors", "fit_skin_law", "load_curve",
+           "paired_arrays"]
 
 REFERENCE_FORCE_N = 2.0
+
+
+def paired_arrays(x, y, names: tuple[str, str], min_size: int = 2
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Two finite 1-D float arrays of the same length >= ``min_size``, or a ValueError naming them."""
+    a = np.asarray(x, dtype=float)
+    b = np.asarray(y, dtype=float)
+    if a.shape != b.shape or a.ndim != 1 or a.size < min_size:
+        raise ValueError(f"{names[0]} and {names[1]} must be 1-D arrays of the same length "
+                         f">= {min_size} (got shapes {a.shape} and {b.shape})")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise ValueError(f"{names[0]} and {names[1]} must be finite")
+    return a, b
 
 
 @dataclass(frozen=True)

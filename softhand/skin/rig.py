@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from softhand.laws.fit import paired_arrays
 from softhand.skin.pad import PadParams, add_pad
 from softhand.skin.soft_contact import SoftContactParams
 
@@ -208,12 +209,7 @@ def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> 
 def run_rig(model: mujoco.MjModel, time_s, displacement_mm, *, representation: str = "",
             settings: RigSettings = RigSettings()) -> RigCurve:
     """Drive the plate along ``displacement_mm(time_s)`` (linear in between) and record it."""
-    t_cmd = np.asarray(time_s, dtype=float)
-    d_cmd = np.asarray(displacement_mm, dtype=float)
-    if t_cmd.shape != d_cmd.shape or t_cmd.ndim != 1 or t_cmd.size < 2:
-        raise ValueError("time_s and displacement_mm must be 1-D arrays of the same length >= 2")
-    if not (np.all(np.isfinite(t_cmd)) and np.all(np.isfinite(d_cmd))):
-        raise ValueError("time_s and displacement_mm must be finite")
+    t_cmd, d_cmd = paired_arrays(time_s, displacement_mm, ("time_s", "displacement_mm"))
     data = mujoco.MjData(model)
     dt = model.opt.timestep
     n = int(np.floor((t_cmd[-1] - t_cmd[0]) / dt + 1e-9))

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from softhand.laws.fit import paired_arrays
+
 __all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
 
 D_MAX = 0.3  # largest impedance allowed: beyond it the contact acts as a motion constraint
@@ -117,12 +119,7 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
     lightest body the skin will touch: contact damping is explicit under ``implicitfast``, so a
     damping set for a heavier body makes a light one unstable.
     """
-    d = np.asarray(delta_mm, dtype=float)
-    f = np.asarray(force_N, dtype=float)
-    if d.shape != f.shape or d.ndim != 1 or d.size < 5:
-        raise ValueError("delta_mm and force_N must be 1-D arrays of the same length >= 5")
-    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(f))):
-        raise ValueError("delta_mm and force_N must be finite")
+    d, f = paired_arrays(delta_mm, force_N, ("delta_mm", "force_N"), min_size=5)
     keep = d > 0
     d, f = d[keep], f[keep]
     top = float(d.max()) * 1e-3

@@ -1,0 +1,43 @@
+"""Press a calibrated skin in MuJoCo and compare it with its FE curve and with a human finger.
+
+Run: ``python examples/skin_in_mujoco.py [SKIN]`` (default pocket2-sil; a few seconds). Uses the
+shipped calibration in ``calibration/skins`` (``softhand calibrate`` makes it). Prints the force at
+1 mm and 2 mm of indentation for the FE record, rigid contact, calibrated soft contact and the
+relaxation pad, and the force left after the 10 s hold.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from softhand.skin.calibrate import CALIBRATION_MASS_KG, fe_curves
+from softhand.skin.files import FE_DIR, load_calibration
+from softhand.skin.rig import RigSettings, build_rig, run_rig
+
+
+def main(skin: str = "pocket2-sil") -> dict[str, dict[str, float]]:
+    cal = load_calibration(skin)
+    curve = fe_curves(skin, FE_DIR)[0][0]
+    ramp = ~curve.hold
+    settings = RigSettings(mass_kg=CALIBRATION_MASS_KG)
+    rows = {"FE": {"F_1mm": float(np.interp(1.0, curve.displacement_mm[ramp], curve.force_N[ramp])),
+                   "F_2mm": float(np.interp(2.0, curve.displacement_mm[ramp], curve.force_N[ramp])),
+                   "F_end": float(curve.force_N[-1])}}
+    for rep, kw in (("rigid", {}), ("soft-contact", {"soft": cal.soft_contact}),
+                    ("soft-contact+relaxation", {"pad": cal.pad})):
+        out = run_rig(build_rig(rep, settings=settings, **kw), curve.time_s, curve.displacement_mm,
+                      settings=settings)
+        up = out.time_s <= curve.time_s[curve.peak_index]
+        rows[rep] = {"F_1mm": float(np.interp(1.0, out.displacement_mm[up], out.force_N[up])),
+                     "F_2mm": float(np.interp(2.0, out.displacement_mm[up], out.force_N[up])),
+                     "F_end": float(out.force_N[-1])}
+    print(f"{skin}: force (N) at 1 mm and 2 mm of indentation, and after the 10 s hold")
+    for name, r in rows.items():
+        print(f"  {name:24s} {r['F_1mm']:9.3f} {r['F_2mm']:9.3f} {r['F_end']:9.3f}")
+    return rows
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:2])
