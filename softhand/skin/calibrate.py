@@ -17,6 +17,9 @@ Error measures (all in the rig at timestep 1 ms unless told otherwise):
 * ``relaxation_error_pct``: largest force error in the hold, % of the force at the start of the hold;
 * ``mass_sensitivity_pct``: largest RMS difference (% of 2 N) between the loading curves at 0.01x
   and 100x the calibration mass and the curve at the calibration mass.
+* ``posture_sensitivity_pct`` (soft-contact): largest RMS difference (% of 2 N) between the force
+  on the fingertip of an articulated three-link finger, pressed in four postures, and the law at the
+  same indentation (:mod:`softhand.skin.finger`).
 """
 
 from __future__ import annotations
@@ -167,6 +170,19 @@ def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings, 
     return worst
 
 
+def _posture_sensitivity(soft: SoftContactParams, depth_mm: float) -> float:
+    """Largest RMS error (% of 2 N) of the fingertip force against the law, over four postures."""
+    from softhand.skin.finger import POSTURES_DEG, press_finger
+
+    worst = 0.0
+    for posture in POSTURES_DEG:
+        press = press_finger(soft, posture, depth_mm=1.5 * depth_mm)
+        on = press.force_N > 0
+        err = press.force_N[on] - soft.force(press.indentation_mm[on])
+        worst = max(worst, float(100 * np.sqrt(np.mean(err**2)) / 2.0))
+    return worst
+
+
 def _pad_params(law: SkinLaw, scale: tuple[float, ...] = ()) -> PadParams:
     e = law.elastic
     kmax = float(e.stiffness(np.linspace(0.0, e.max_mm, 400)).max()) * 1e3
@@ -230,6 +246,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
             soft, rms_n = fit_soft_contact(d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
             params, kw = soft.to_dict(), {"soft": soft}
             extra["closed_form_rms_pct_of_2N"] = 100 * rms_n / 2.0
+            extra["posture_sensitivity_pct"] = _posture_sensitivity(soft, float(d[-1]))
         elif rep == "soft-contact+relaxation":
             pad, evals = _fit_pad(law, main, settings)
             params, kw = pad.to_dict(), {"pad": pad}

@@ -22,6 +22,7 @@ __all__ = ["METRICS", "calibrate_many", "summary_table"]
 
 METRICS = ("rms_error_pct_of_2N", "max_error_pct_of_2N", "mass_sensitivity_pct",
            "relaxation_error_pct", "step_us")
+EXTRA = ("posture_sensitivity_pct",)
 
 
 def _one(name: str, reps: tuple[str, ...], fe_dir: str) -> SkinCalibration:
@@ -61,7 +62,7 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
     for n in names:
         save_calibration(cals[n], out)
     summary: dict[str, Any] = {
-        "skins": {n: {r: {m: v.to_dict()[m] for m in METRICS}
+        "skins": {n: {r: {m: v.to_dict()[m] for m in METRICS + EXTRA if m in v.to_dict()}
                       for r, v in cals[n].representations.items()} for n in names},
         "laws": {n: {"fitted": [e.to_dict() for e in cals[n].law.fitted],
                      "validated": [e.to_dict() for e in cals[n].law.validated],
