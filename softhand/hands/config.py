@@ -1,0 +1,180 @@
+"""Typed, validated configuration of the two hands and the handshake scene (SI units throughout).
+
+Each dataclass is frozen and checks its fields on construction: a bad value raises one
+``ValueError`` that names the field, quotes the value and gives the allowed range.
+Defaults come from the paper (hand length and width, ``softhand.paper``) and from
+``softhand.hands.constants`` (everything else, each with its reference).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from softhand.hands import constants as const
+from softhand.paper import paper
+
+__all__ = ["HandConfig", "PartnerConfig", "ProstheticConfig", "SceneConfig"]
+
+
+def _paper_mm(key: str) -> float:
+    return float(paper()["anthropometry"][key]) / 1000.0
+
+
+def _check(name: str, value: float, lo: float, hi: float, unit: str) -> None:
+    """Raise ValueError unless ``lo < value < hi`` (open interval) and finite."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise ValueError(f"{name} = {value!r}: expected a number in {unit}")
+    if not (math.isfinite(value) and lo < value < hi):
+        raise ValueError(f"{name} = {value!r} {unit}: allowed range ({lo}, {hi}) {unit}")
+
+
+@dataclass(frozen=True)
+class HandConfig:
+    """Anthropometry of one adult right hand.
+
+    Attributes:
+        hand_length_m: distal wrist crease to the tip of the middle finger (m). Default: the
+            paper's experimenter, Table 1 (190 mm).
+        hand_width_m: breadth across the metacarpal heads, radial edge of the index MCP to the ulnar
+            edge of the little MCP (m). Default: paper Table 1 (88 mm).
+        palm_thickness_m: dorsal to palmar skin at the metacarpals (m). None: 0.16 x hand length
+            (constants.PALM_THICKNESS_RATIO, an assumption).
+        skin_thickness_m: soft layer over the rigid bone (m): bones are this much smaller than the
+            segment envelope, so skins and tissues touch first.
+        density_kg_m3: tissue density for segment masses = density x envelope volume (kg/m^3).
+    """
+
+    hand_length_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_length_mm"))
+    hand_width_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_width_mm"))
+    palm_thickness_m: float | None = None
+    skin_thickness_m: float = 0.004
+    density_kg_m3: float = const.DENSITY_KG_M3
+
+    def __post_init__(self) -> None:
+        _check("hand_length_m", self.hand_length_m, 0.10, 0.30, "m")
+        _check("hand_width_m", self.hand_width_m, 0.05, 0.15, "m")
+        ratio = self.hand_width_m / self.hand_length_m
+        if not 0.30 < ratio < 0.70:
+            raise ValueError(
+                f"hand_width_m / hand_length_m = {ratio:.3f} ({self.hand_width_m!r} m / "
+                f"{self.hand_length_m!r} m): allowed range (0.3, 0.7)"
+            )
+        if self.palm_thickness_m is not None:
+            _check("palm_thickness_m", self.palm_thickness_m, 0.01, 0.06, "m")
+        _check("skin_thickness_m", self.skin_thickness_m, 0.0, 0.3 * self.thickness_m, "m")
+        _check("density_kg_m3", self.density_kg_m3, 100.0, 5000.0, "kg/m^3")
+
+    @property
+    def thickness_m(self) -> float:
+        """Palm thickness actually used (m)."""
+        if self.palm_thickness_m is not None:
+            return self.palm_thickness_m
+        return const.PALM_THICKNESS_RATIO * self.hand_length_m
+
+
+@dataclass(frozen=True)
+class ProstheticConfig:
+    """A commercial-class multi-articulating prosthetic right hand (6 motors).
+
+    Attributes:
+        hand: anthropometry of the hand shell.
+        closing_time_s: time for a finger motor to close its finger from fully open to fully
+            flexed at full command (s); sets each motor's speed limit ([Belter13] ~1 s).
+        thumb_rotation_time_s: time for the thumb rotation motor to sweep its range (s).
+        grip_force_n: maximum power-grip force (N); sets the motors' stall torques ([Belter13]).
+        stall_deflection_rad: servo deflection at stall torque (rad); sets the servo stiffness.
+        armature_kg_m2: reflected rotor inertia on each motor-driven joint (kg m^2).
+    """
+
+    hand: HandConfig = field(default_factory=HandConfig)
+    closing_time_s: float = const.PROSTHETIC["closing_time_s"]
+    thumb_rotation_time_s: float = const.PROSTHETIC["closing_time_s"]
+    grip_force_n: float = const.PROSTHETIC["grip_force_n"]
+    stall_deflection_rad: float = const.PROSTHETIC["stall_deflection_rad"]
+    armature_kg_m2: float = const.PROSTHETIC["armature_kg_m2"]
+
+    def __post_init__(self) -> None:
+        _check("closing_time_s", self.closing_time_s, 0.05, 10.0, "s")
+        _check("thumb_rotation_time_s", self.thumb_rotation_time_s, 0.05, 10.0, "s")
+        _check("grip_force_n", self.grip_force_n, 0.0, 1000.0, "N")
+        _check("stall_deflection_rad", self.stall_deflection_rad, 0.0, 0.5, "rad")
+        _check("armature_kg_m2", self.armature_kg_m2, -1e-12, 1e-2, "kg m^2")
+
+
+@dataclass(frozen=True)
+class PartnerConfig:
+    """The partner's human right hand, driven by a scripted grip.
+
+    Attributes:
+        hand: anthropometry of the partner's hand.
+        max_grip_force_n: maximal grip force (N); caps the finger flexion actuators.
+        finger_kp_nm_per_rad: flexion servo stiffness per radian of summed joint flexion (N m/rad).
+        thumb_kp_nm_per_rad: thumb opposition servo stiffness (N m/rad).
+        wrist_kp_nm_per_rad: wrist servo stiffness (N m/rad).
+        wrist_torque_nm: wrist actuator torque limit (N m).
+        passive_stiffness_nm_per_rad: passive stiffness of an MCP-like joint (N m/rad); other joints
+            are scaled so that all joints of a free digit reach their limits together.
+        joint_damping_nm_s_per_rad: damping of each finger joint (N m s/rad).
+        forearm_length_m: length of the rigid forearm stub between the mount and the wrist (m).
+    """
+
+    hand: HandConfig = field(default_factory=HandConfig)
+    max_grip_force_n: float = const.PARTNER["max_grip_force_n"]
+    finger_kp_nm_per_rad: float = const.PARTNER["finger_kp_nm_per_rad"]
+    thumb_kp_nm_per_rad: float = const.PARTNER["thumb_kp_nm_per_rad"]
+    wrist_kp_nm_per_rad: float = const.PARTNER["wrist_kp_nm_per_rad"]
+    wrist_torque_nm: float = const.PARTNER["wrist_torque_nm"]
+    passive_stiffness_nm_per_rad: float = const.PARTNER["passive_stiffness_nm_per_rad"]
+    joint_damping_nm_s_per_rad: float = const.PARTNER["joint_damping_nm_s_per_rad"]
+    forearm_length_m: float = 0.10
+
+    def __post_init__(self) -> None:
+        _check("max_grip_force_n", self.max_grip_force_n, 0.0, 2000.0, "N")
+        _check("finger_kp_nm_per_rad", self.finger_kp_nm_per_rad, 0.0, 100.0, "N m/rad")
+        _check("thumb_kp_nm_per_rad", self.thumb_kp_nm_per_rad, 0.0, 100.0, "N m/rad")
+        _check("wrist_kp_nm_per_rad", self.wrist_kp_nm_per_rad, 0.0, 1000.0, "N m/rad")
+        _check("wrist_torque_nm", self.wrist_torque_nm, 0.0, 100.0, "N m")
+        _check(
+            "passive_stiffness_nm_per_rad", self.passive_stiffness_nm_per_rad, 0.0, 10.0, "N m/rad"
+        )
+        _check(
+            "joint_damping_nm_s_per_rad", self.joint_damping_nm_s_per_rad, 0.0, 10.0, "N m s/rad"
+        )
+        _check("forearm_length_m", self.forearm_length_m, 0.0, 0.5, "m")
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """The handshake scene: options, the fixed prosthetic hand and the mocap-driven partner.
+
+    World frame: +X is the prosthetic hand's pointing direction, +Z up, gravity along -Z.
+    The prosthetic hand is in a handshake pose: thumb up, palm facing +Y. The partner hand faces it:
+    fingers along -X, thumb up, palm facing -Y.
+
+    Attributes:
+        prosthetic: the prosthetic hand.
+        partner: the partner's hand.
+        timestep_s: simulation time step (s).
+        gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
+        prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
+        partner_start_offset_m: partner mount start position relative to its contact pose (m, world
+            frame); the env moves the mocap from there to the contact pose (reach) and back.
+    """
+
+    prosthetic: ProstheticConfig = field(default_factory=ProstheticConfig)
+    partner: PartnerConfig = field(default_factory=PartnerConfig)
+    timestep_s: float = 0.001
+    gravity_m_s2: float = 9.81
+    prosthetic_wrist_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    partner_start_offset_m: tuple[float, float, float] = (0.15, 0.10, 0.0)
+
+    def __post_init__(self) -> None:
+        _check("timestep_s", self.timestep_s, 0.0, 0.01, "s")
+        _check("gravity_m_s2", self.gravity_m_s2, -1e-12, 100.0, "m/s^2")
+        for name in ("prosthetic_wrist_pos_m", "partner_start_offset_m"):
+            value = getattr(self, name)
+            if len(value) != 3:
+                raise ValueError(f"{name} = {value!r}: expected 3 coordinates in m")
+            for i, v in enumerate(value):
+                _check(f"{name}[{i}]", v, -10.0, 10.0, "m")

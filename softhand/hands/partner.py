@@ -1,0 +1,271 @@
+"""The partner's human right hand, on a mount the env moves (a mocap body), driven by a scripted grip.
+
+Structure under the mount (``parent_body``, whose frame is the partner's hand frame at zero wrist
+angles): ``forearm`` (a rigid stub, no joints) then ``palm`` with two wrist joints
+(``wrist_flex``: flexion positive; ``wrist_dev``: radial deviation positive), thumb and fingers
+with human joint ranges ([AAOS65], constants.AAOS_RANGE_DEG, hyperextension included).
+
+Actuation (8 position servos; ctrl is a target in rad):
+
+====================== =========================================================================
+``{finger}_flex`` x4   tendon ``{finger}_flexor`` = mcp + pip + dip (a flexor spanning the finger)
+``thumb_flex``         tendon ``thumb_flexor`` = cmc + mcp + ip
+``thumb_opp``          joint ``thumb_rot`` (palmar abduction / opposition)
+``wrist_flex``         joint ``wrist_flex``
+``wrist_dev``          joint ``wrist_dev``
+====================== =========================================================================
+
+A tendon servo pulls all joints of a digit at once; weak passive joint springs (stiffness inversely
+proportional to each joint's flexion range) share the pull so that a free digit curls with all
+joints reaching their limits together, while a digit that meets the other hand keeps curling
+around it (an enveloping grip). The finger servos are capped at the maximal grip force shared by four
+fingers acting at the proximal phalanx ([Mathiowetz85]); the grip force in a handshake comes from how
+far the scripted target lies beyond contact (kp x overshoot).
+
+Contact geoms: ``tissue_{segment}`` (contype = conaffinity = 0: contacts only through explicit
+``<pair>`` elements): capsules around the thumb metacarpal (thenar) and every phalanx, and two
+ellipsoids on the palm body: ``tissue_palm`` (palmar) and ``tissue_back`` (dorsal).
+List them with partner_tissue_geoms(). Rigid bones (``bone_*``) collide with the prosthetic bones.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+
+from softhand.hands import constants as const
+from softhand.hands.config import PartnerConfig
+from softhand.hands.layout import hand_layout
+from softhand.hands.skeleton import add_skeleton, angle, joint_key, new_spec
+
+__all__ = [
+    "TISSUE_SEGMENTS",
+    "add_partner_hand",
+    "build_partner_hand",
+    "partner_actuators",
+    "partner_tissue_geoms",
+]
+
+_CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
+_ELLIPSOID = mujoco.mjtGeom.mjGEOM_ELLIPSOID
+_TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
+_BONE_RGBA = (0.55, 0.42, 0.38, 1.0)
+_TISSUE_RGBA = (0.87, 0.68, 0.58, 0.5)
+
+#: Segments carrying a tissue geom, in the order partner_tissue_geoms() returns them.
+TISSUE_SEGMENTS: tuple[str, ...] = (
+    "palm",
+    "back",
+    "thumb_metacarpal",
+    "thumb_proximal",
+    "thumb_distal",
+    *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
+)
+
+_DIGIT_JOINTS = {"thumb": ("cmc", "mcp", "ip"), **{f: ("mcp", "pip", "dip") for f in const.FINGERS}}
+
+
+def partner_actuators(prefix: str = "hum_") -> tuple[str, ...]:
+    """Names of the 8 partner servos, in ctrl order."""
+    return (
+        *(f"{prefix}{f}_flex" for f in const.FINGERS),
+        f"{prefix}thumb_flex",
+        f"{prefix}thumb_opp",
+        f"{prefix}wrist_flex",
+        f"{prefix}wrist_dev",
+    )
+
+
+def _servo(
+    spec: mujoco.MjSpec,
+    name: str,
+    target: str,
+    trn: mujoco.mjtTrn,
+    *,
+    kp: float,
+    lo: float,
+    hi: float,
+    torque: float,
+) -> None:
+    act = spec.add_actuator(name=name, target=target, trntype=trn)
+    act.set_to_position(kp=kp, dampratio=1.0)
+    act.ctrllimited, act.ctrlrange = _TRUE, [lo, hi]
+    act.forcelimited, act.forcerange = _TRUE, [-torque, torque]
+
+
+def add_partner_hand(
+    spec: mujoco.MjSpec,
+    parent_body: mujoco.MjsBody,
+    config: PartnerConfig | None = None,
+    prefix: str = "hum_",
+) -> mujoco.MjsBody:
+    """Add the partner's right hand under ``parent_body`` (normally a mocap body).
+
+    Args:
+        spec: the spec to edit.
+        parent_body: mount whose frame is the partner's hand frame at zero wrist angles (origin at
+            the wrist crease, +x distal, +y radial, +z dorsal).
+        config: the partner; default PartnerConfig().
+        prefix: prefix of every element name.
+
+    Returns:
+        The palm body.
+    """
+    config = config or PartnerConfig()
+    if not isinstance(config, PartnerConfig):
+        raise ValueError(f"config = {config!r}: expected a PartnerConfig")
+    layout = hand_layout(config.hand)
+    rng = const.AAOS_RANGE_DEG
+    skin, t = layout.skin_m, layout.thickness_m
+
+    # Forearm stub (rigid, massless: it moves with the mount) and wrist joints on the palm.
+    forearm = parent_body.add_body(name=f"{prefix}forearm")
+    r_arm = 0.6 * t  # assumption: forearm near the wrist ~ 1.2 palm thicknesses across
+    if config.forearm_length_m > r_arm:
+        forearm.add_geom(
+            name=f"{prefix}bone_forearm",
+            type=_CAPSULE,
+            size=[r_arm - skin, 0, 0],
+            fromto=[-config.forearm_length_m, 0, 0, -r_arm, 0, 0],
+            mass=0.0,
+            contype=const.BONE_BITS["partner"][0],
+            conaffinity=const.BONE_BITS["partner"][1],
+            rgba=list(_BONE_RGBA),
+        )
+
+    # Passive springs: k_j = k0 x 90 deg / (upper limit of joint j), so a free digit's joints
+    # reach their upper limits together under one tendon pull.
+    k0, damping = config.passive_stiffness_nm_per_rad, config.joint_damping_nm_s_per_rad
+    options = {}
+    for digit, shorts in _DIGIT_JOINTS.items():
+        for short in shorts:
+            key = joint_key(digit, short)
+            options[key] = {
+                "stiffness": [k0 * 90.0 / rng[key][1], 0.0, 0.0],
+                "damping": [damping, 0.0, 0.0],
+            }
+    options["thumb_rot"] = {"damping": [damping, 0.0, 0.0]}
+    skel = add_skeleton(
+        spec,
+        forearm,
+        layout,
+        prefix=prefix,
+        ranges_deg=rng,
+        bone_bits=const.BONE_BITS["partner"],
+        bone_rgba=_BONE_RGBA,
+        joint_options=options,
+    )
+    palm = skel.bodies["palm"]
+    for short, axis in (("flex", (0.0, 1.0, 0.0)), ("dev", (0.0, 0.0, 1.0))):
+        lo, hi = rng[f"wrist_{short}"]
+        palm.add_joint(
+            name=f"{prefix}wrist_{short}",
+            type=mujoco.mjtJoint.mjJNT_HINGE,
+            axis=list(axis),
+            range=[angle(spec, math.radians(lo)), angle(spec, math.radians(hi))],
+            damping=[10 * damping, 0.0, 0.0],
+            armature=1e-4,
+        )
+
+    # Tissues.
+    def tissue(body: mujoco.MjsBody, name: str, **kw) -> None:
+        body.add_geom(
+            name=f"{prefix}tissue_{name}",
+            contype=0,
+            conaffinity=0,
+            mass=0.0,
+            group=2,
+            rgba=list(_TISSUE_RGBA),
+            **kw,
+        )
+
+    xm, half_w, az = layout.palm_length_m, 0.5 * layout.width_m, 0.35 * t
+    for name, sign in (("palm", -1.0), ("back", 1.0)):
+        tissue(
+            palm,
+            name,
+            type=_ELLIPSOID,
+            pos=[0.5 * xm, 0.0, sign * (0.5 * t - az)],
+            size=[0.48 * xm, 0.95 * half_w, az],
+        )
+    for seg in TISSUE_SEGMENTS[2:]:
+        digit, part = seg.split("_")
+        d = layout.digits[digit]
+        length, radius = d.lengths_m[part], d.radii_m[part]
+        end = length - radius if part == "distal" else length
+        tissue(
+            skel.bodies[seg], seg, type=_CAPSULE, size=[radius, 0, 0], fromto=[0, 0, 0, end, 0, 0]
+        )
+
+    # Flexor tendons and servos.
+    share = config.max_grip_force_n / const.PARTNER["grip_fingers"]
+    for digit in (*const.FINGERS, "thumb"):  # ctrl order of partner_actuators()
+        shorts = _DIGIT_JOINTS[digit]
+        tendon = spec.add_tendon(name=f"{prefix}{digit}_flexor")
+        for short in shorts:
+            tendon.wrap_joint(skel.joints[(digit, short)], 1.0)
+        lo = sum(math.radians(rng[joint_key(digit, s)][0]) for s in shorts)
+        hi = sum(math.radians(rng[joint_key(digit, s)][1]) for s in shorts)
+        _servo(
+            spec,
+            f"{prefix}{digit}_flex",
+            f"{prefix}{digit}_flexor",
+            mujoco.mjtTrn.mjTRN_TENDON,
+            kp=config.thumb_kp_nm_per_rad if digit == "thumb" else config.finger_kp_nm_per_rad,
+            lo=lo,
+            hi=hi,
+            torque=share * layout.digits[digit].lengths_m["proximal"],
+        )
+    # Joint servos: thumb opposition and the wrist.
+    lo, hi = (math.radians(v) for v in rng["thumb_rot"])
+    _servo(
+        spec,
+        f"{prefix}thumb_opp",
+        skel.joints[("thumb", "rot")],
+        mujoco.mjtTrn.mjTRN_JOINT,
+        kp=config.thumb_kp_nm_per_rad,
+        lo=lo,
+        hi=hi,
+        torque=share * layout.digits["thumb"].lengths_m["proximal"],
+    )
+    for short in ("flex", "dev"):
+        lo, hi = (math.radians(v) for v in rng[f"wrist_{short}"])
+        _servo(
+            spec,
+            f"{prefix}wrist_{short}",
+            f"{prefix}wrist_{short}",
+            mujoco.mjtTrn.mjTRN_JOINT,
+            kp=config.wrist_kp_nm_per_rad,
+            lo=lo,
+            hi=hi,
+            torque=config.wrist_torque_nm,
+        )
+    return palm
+
+
+def build_partner_hand(config: PartnerConfig | None = None, prefix: str = "hum_") -> mujoco.MjSpec:
+    """A spec with the partner hand alone on a mocap mount ``{prefix}base`` at the world origin."""
+    spec = new_spec("softhand_partner_hand")
+    base = spec.worldbody.add_body(name=f"{prefix}base", mocap=True)
+    add_partner_hand(spec, base, config, prefix)
+    return spec
+
+
+def partner_tissue_geoms(
+    model_or_spec: mujoco.MjModel | mujoco.MjSpec, prefix: str = "hum_"
+) -> tuple[str, ...]:
+    """Names of the partner's tissue geoms (order of TISSUE_SEGMENTS), checked to exist.
+
+    Raises:
+        ValueError: if one is missing from ``model_or_spec``.
+    """
+    names = tuple(f"{prefix}tissue_{seg}" for seg in TISSUE_SEGMENTS)
+    for name in names:
+        if isinstance(model_or_spec, mujoco.MjSpec):
+            found = model_or_spec.geom(name) is not None
+        else:
+            found = mujoco.mj_name2id(model_or_spec, mujoco.mjtObj.mjOBJ_GEOM, name) >= 0
+        if not found:
+            raise ValueError(f"partner tissue geom {name!r} not found (prefix = {prefix!r})")
+    return names

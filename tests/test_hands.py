@@ -1,0 +1,316 @@
+"""Tests of softhand.hands: the two hands and the handshake scene, built with MjSpec and compiled.
+
+Checks counts and names against the paper (18 regions, softhand.paper), geometry against the
+paper's hand length and width (Table 1) measured on the compiled model, ranges against the
+constants, actuation against the commercial closing time, and that models/mjcf is up to date.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from softhand.hands import (
+    HandConfig,
+    PartnerConfig,
+    ProstheticConfig,
+    SceneConfig,
+    build_partner_hand,
+    build_prosthetic_hand,
+    partner_actuators,
+    partner_contact_pose,
+    partner_tissue_geoms,
+    prosthetic_actuators,
+    regions,
+    scene_spec,
+    write_mjcf,
+)
+from softhand.hands import constants as const
+from softhand.hands.mjcf import MJCF_FILES
+from softhand.paper import paper
+
+MJCF_DIR = Path(__file__).resolve().parents[1] / "models" / "mjcf"
+PAPER_REGIONS = tuple(paper()["handshake"]["regions"])
+PAPER_LENGTH_M = paper()["anthropometry"]["experimenter_hand_length_mm"] / 1000.0
+PAPER_WIDTH_M = paper()["anthropometry"]["experimenter_hand_width_mm"] / 1000.0
+
+
+@pytest.fixture(scope="module")
+def scene() -> tuple[mujoco.MjSpec, mujoco.MjModel]:
+    spec = scene_spec()
+    return spec, spec.compile()
+
+
+def _support(model: mujoco.MjModel, data: mujoco.MjData, geom: int, u: np.ndarray) -> float:
+    """max over the geom's points p of p . u (world frame)."""
+    c, R, size = data.geom_xpos[geom], data.geom_xmat[geom].reshape(3, 3), model.geom_size[geom]
+    kind = model.geom_type[geom]
+    if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+        return c @ u + size[0]
+    if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        return c @ u + size[1] * abs(R[:, 2] @ u) + size[0]
+    if kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+        return c @ u + np.linalg.norm(size * (R.T @ u))
+    if kind == mujoco.mjtGeom.mjGEOM_BOX:
+        return c @ u + np.sum(size * np.abs(R.T @ u))
+    raise AssertionError(f"unexpected geom type {kind}")
+
+
+def _body_geoms(model: mujoco.MjModel, body: str) -> list[int]:
+    b = model.body(body).id
+    return [g for g in range(model.ngeom) if model.geom_bodyid[g] == b]
+
+
+# ------------------------------------------------------------------------------------------------
+# Scene and counts
+# ------------------------------------------------------------------------------------------------
+
+
+def test_scene_compiles_with_options(scene):
+    _, model = scene
+    assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert model.opt.timestep == pytest.approx(0.001)
+    np.testing.assert_allclose(model.opt.gravity, [0.0, 0.0, -9.81])
+    assert model.nmocap == 1 and model.body("hum_base").mocapid[0] == 0
+    assert model.body("pro_wrist").dofnum[0] == 0  # prosthetic fixed to the world
+    assert model.nu == 6 + 8
+
+
+def test_eighteen_regions_with_skin_site_and_touch_sensor(scene):
+    spec, model = scene
+    info = regions(model, "pro_")
+    assert tuple(info) == PAPER_REGIONS and len(info) == 18
+    assert tuple(regions(spec, "pro_")) == PAPER_REGIONS
+    for region, r in info.items():
+        geom, site, sensor = model.geom(r.geom), model.site(r.site), model.sensor(r.sensor)
+        assert geom.type[0] == mujoco.mjtGeom.mjGEOM_ELLIPSOID, region
+        assert geom.contype[0] == 0 and geom.conaffinity[0] == 0, region
+        assert geom.bodyid[0] == site.bodyid[0] == model.body(r.body).id, region
+        assert sensor.type[0] == mujoco.mjtSensor.mjSENS_TOUCH, region
+        assert sensor.objtype[0] == mujoco.mjtObj.mjOBJ_SITE and sensor.objid[0] == site.id
+        # the site encloses the skin: same centre and orientation, larger semi-axes
+        np.testing.assert_allclose(site.pos, geom.pos)
+        assert np.all(site.size > geom.size), region
+    with pytest.raises(ValueError, match="Thumb1"):
+        regions(build_partner_hand().compile(), "pro_")
+
+
+def test_six_prosthetic_actuators(scene):
+    _, model = scene
+    names = [model.actuator(i).name for i in range(model.nu)]
+    assert [n for n in names if n.startswith("pro_")] == list(prosthetic_actuators("pro_"))
+    assert len(prosthetic_actuators()) == const.PROSTHETIC["motor_count"] == 6
+    assert [n for n in names if n.startswith("hum_")] == list(partner_actuators("hum_"))
+    for a in prosthetic_actuators():
+        act = model.actuator(a)
+        lo, hi = act.forcerange
+        assert act.forcelimited[0] and 0.2 < hi == -lo < 5.0, (a, hi)  # N m, from 136 N grip
+        assert act.ctrlrange[1] == -act.ctrlrange[0] > 0.0
+
+
+def test_joint_ranges_within_constants(scene):
+    _, model = scene
+    checked = 0
+    for j in range(model.njnt):
+        name = model.joint(j).name
+        prefix, rest = name.split("_", 1)
+        digit, short = rest.split("_", 1)
+        key = f"{digit}_{short}" if digit in ("thumb", "wrist") else short
+        lo, hi = np.degrees(model.jnt_range[j])
+        human_lo, human_hi = const.AAOS_RANGE_DEG[key]
+        assert human_lo - 1e-6 <= lo < hi <= human_hi + 1e-6, (name, lo, hi)
+        if prefix == "pro":
+            assert (lo, hi) == pytest.approx(const.PROSTHETIC_RANGE_DEG[key]), name
+        else:
+            assert (lo, hi) == pytest.approx(const.AAOS_RANGE_DEG[key]), name
+        checked += 1
+    assert checked == 16 + 18
+
+
+def test_bones_collide_only_with_the_other_hand(scene):
+    _, model = scene
+
+    def collide(a: int, b: int) -> bool:
+        return bool(
+            model.geom_contype[a] & model.geom_conaffinity[b]
+            or model.geom_contype[b] & model.geom_conaffinity[a]
+        )
+
+    geoms = {
+        p: [g for g in range(model.ngeom) if model.geom(g).name.startswith(p)]
+        for p in ("pro_bone_", "hum_bone_", "pro_skin_", "hum_tissue_")
+    }
+    assert len(geoms["pro_bone_"]) == 4 + 3 + 12 and len(geoms["pro_skin_"]) == 18
+    for a in geoms["pro_bone_"]:
+        assert all(collide(a, b) for b in geoms["hum_bone_"])
+        assert not any(collide(a, b) for b in geoms["pro_bone_"])
+    for b in geoms["hum_bone_"]:
+        assert not any(collide(b, c) for c in geoms["hum_bone_"])
+    for g in geoms["pro_skin_"] + geoms["hum_tissue_"]:
+        assert model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0
+
+
+def test_partner_tissues_listed(scene):
+    spec, model = scene
+    names = partner_tissue_geoms(model, "hum_")
+    assert names == partner_tissue_geoms(spec, "hum_")
+    assert len(names) == 2 + 3 + 12 and "hum_tissue_palm" in names and "hum_tissue_back" in names
+    with pytest.raises(ValueError, match="hum_tissue_palm"):
+        partner_tissue_geoms(build_prosthetic_hand().compile(), "hum_")
+
+
+# ------------------------------------------------------------------------------------------------
+# Geometry and mass, measured on the compiled model
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "build, prefix", [(build_prosthetic_hand, "pro_"), (build_partner_hand, "hum_")]
+)
+def test_hand_length_and_width_match_paper(build, prefix):
+    model = build().compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    palm = model.body(f"{prefix}palm").id
+    R = data.xmat[palm].reshape(3, 3)  # hand frame in world: columns x distal, y radial, z dorsal
+    x, y = R[:, 0], R[:, 1]
+    crease = data.site_xpos[model.site(f"{prefix}wrist_crease").id]
+    tip = max(_support(model, data, g, x) for g in _body_geoms(model, f"{prefix}middle_distal"))
+    length = tip - crease @ x
+    palm_geoms = _body_geoms(model, f"{prefix}palm")
+    width = max(_support(model, data, g, y) for g in palm_geoms) + max(
+        _support(model, data, g, -y) for g in palm_geoms
+    )
+    assert length == pytest.approx(PAPER_LENGTH_M, rel=0.03)
+    assert width == pytest.approx(PAPER_WIDTH_M, rel=0.03)
+    # thumb tip ~56 mm proximal to the index tip ([Chatzioglou24]), hand extended
+    tips = {d: data.site_xpos[model.site(f"{prefix}{d}_tip").id] @ x for d in ("thumb", "index")}
+    assert tips["index"] - tips["thumb"] == pytest.approx(
+        const.FINGERTIP_OFFSET_M["thumb_to_index"], abs=0.002
+    )
+
+
+def test_hand_mass_plausible():
+    model = build_prosthetic_hand().compile()
+    mass = model.body("pro_palm").subtreemass[0]
+    # commercial hands 0.45-0.615 kg ([Belter13]); a 70 kg adult's hand 0.42 kg ([Winter09]).
+    assert 0.35 < mass < 0.60, mass
+    assert mass == pytest.approx(const.HAND_MASS_FRACTION * 70.0, rel=0.15)
+
+
+def test_flexion_and_opposition_move_tips_palmar():
+    model = build_prosthetic_hand().compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    z_tip = {d: data.site_xpos[model.site(f"pro_{d}_tip").id][2] for d in ("index", "thumb")}
+    for joint in ("pro_index_mcp", "pro_thumb_rot"):
+        data.qpos[:] = 0.0
+        data.qpos[model.joint(joint).qposadr[0]] = 0.5
+        mujoco.mj_kinematics(model, data)
+        digit = joint.split("_")[1]
+        assert data.site_xpos[model.site(f"pro_{digit}_tip").id][2] < z_tip[digit] - 0.01, joint
+
+
+# ------------------------------------------------------------------------------------------------
+# Actuation
+# ------------------------------------------------------------------------------------------------
+
+
+def test_full_command_closes_within_commercial_time():
+    config = ProstheticConfig()
+    model = build_prosthetic_hand(config).compile()
+    data = mujoco.MjData(model)
+    data.ctrl[:] = model.actuator_ctrlrange[:, 1]
+    reached: dict[str, float] = {}
+    for _ in range(int(2.0 * config.closing_time_s / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+        for a in range(model.nu):
+            j = model.actuator_trnid[a, 0]
+            if model.actuator(a).name not in reached and (
+                data.qpos[model.jnt_qposadr[j]] >= 0.95 * model.jnt_range[j, 1]
+            ):
+                reached[model.actuator(a).name] = data.time
+    assert np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))
+    assert set(reached) == set(prosthetic_actuators())
+    for name, t in reached.items():
+        assert 0.5 * config.closing_time_s <= t <= 1.5 * config.closing_time_s, (name, t)
+    # every joint, coupled ones included, ends flexed to >= 90 % of its upper limit
+    assert np.all(data.qpos >= 0.90 * model.jnt_range[:, 1]), np.degrees(data.qpos)
+
+
+def test_touch_sensors_read_skin_pair_contacts():
+    spec = scene_spec()
+    info = regions(spec)
+    tissues = partner_tissue_geoms(spec)
+    for r in info.values():
+        for t in tissues:
+            spec.add_pair(geomname1=r.geom, geomname2=t)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    pos, quat = partner_contact_pose(SceneConfig())
+    data.mocap_pos[0], data.mocap_quat[0] = pos, quat
+    hum = [model.actuator(a).id for a in partner_actuators()[:5]]
+    pro = [model.actuator(a).id for a in prosthetic_actuators()[:5]]
+    for i in range(600):  # both hands close their fingers and thumbs around each other
+        data.ctrl[hum] = min(i / 300, 1.0) * 0.5 * model.actuator_ctrlrange[hum, 1]
+        data.ctrl[pro] = 0.5 * model.actuator_ctrlrange[pro, 1] if i < 400 else 0.0
+        mujoco.mj_step(model, data)
+    assert np.all(np.isfinite(data.sensordata))
+    force = np.zeros(6)
+    pair_force = dict.fromkeys(info, 0.0)
+    skin_region = {model.geom(r.geom).id: k for k, r in info.items()}
+    for c in range(data.ncon):
+        region = skin_region.get(data.contact[c].geom1, skin_region.get(data.contact[c].geom2))
+        if region is not None:
+            mujoco.mj_contactForce(model, data, c, force)
+            pair_force[region] += force[0]
+    touched = [k for k, f in pair_force.items() if f > 0.05]
+    assert len(touched) >= 3, pair_force
+    for k in touched:  # each sensor sees at least the contacts of its own skin
+        reading = data.sensordata[model.sensor(info[k].sensor).adr[0]]
+        assert reading >= 0.99 * pair_force[k], (k, reading, pair_force[k])
+
+
+# ------------------------------------------------------------------------------------------------
+# Files and configuration errors
+# ------------------------------------------------------------------------------------------------
+
+
+def test_mjcf_files_are_up_to_date(tmp_path):
+    written = write_mjcf(tmp_path)
+    assert sorted(p.name for p in written) == sorted(MJCF_FILES)
+    for path in written:
+        shipped = MJCF_DIR / path.name
+        assert shipped.exists(), f"{shipped} missing: run write_mjcf('models/mjcf')"
+        assert path.read_text() == shipped.read_text(), f"{shipped} is stale: run write_mjcf"
+        assert mujoco.MjModel.from_xml_path(str(shipped)).nbody > 1
+
+
+@pytest.mark.parametrize(
+    "make, value",
+    [
+        (lambda: HandConfig(hand_length_m=-0.19), "-0.19"),
+        (lambda: HandConfig(hand_width_m=math.nan), "nan"),
+        (lambda: HandConfig(hand_width_m=0.12, hand_length_m=0.13), "0.923"),
+        (lambda: HandConfig(skin_thickness_m=0.02), "0.02"),
+        (lambda: ProstheticConfig(closing_time_s=0.0), "0.0"),
+        (
+            lambda: build_prosthetic_hand(
+                ProstheticConfig(hand=HandConfig(skin_thickness_m=0.008))
+            ),
+            "0.008",
+        ),
+        (lambda: ProstheticConfig(grip_force_n=-5.0), "-5.0"),
+        (lambda: PartnerConfig(wrist_torque_nm=1e6), "1000000.0"),
+        (lambda: SceneConfig(timestep_s=0.05), "0.05"),
+        (lambda: SceneConfig(partner_start_offset_m=(0.1, 0.2)), "(0.1, 0.2)"),
+    ],
+)
+def test_bad_config_raises_value_error_naming_value(make, value):
+    with pytest.raises(ValueError, match=value.replace("(", r"\(").replace(")", r"\)")):
+        make()
