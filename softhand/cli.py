@@ -4,6 +4,7 @@
 ``softhand fe sweep``           all 12 designs, curves + summary + plot into calibration/fe
 ``softhand fe export DESIGN``   an Abaqus input deck of the same model
 ``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
+``softhand handshake``          one handshake with shipped calibration: region forces, rerun recording
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 
@@ -255,6 +256,62 @@ def calibrate(skins, representations, out_dir, fe_dir, jobs, as_json) -> None:
         click.echo(json.dumps(result, indent=1))
     else:
         click.echo(summary_table(result))
+
+
+def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items:
+        region, sep, design = item.partition("=")
+        if not sep or not region or not design:
+            raise click.BadParameter(f"{item!r} is not REGION=DESIGN (e.g. Palm1=pocket2-sil)",
+                                     param_hint="--skin")
+        out[region.strip()] = design.strip()
+    return out
+
+
+@main.command("handshake")
+@click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
+@click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN",
+              help="Skin of one region (repeatable), e.g. Palm1=rigid.")
+@click.option("--controller", type=click.Choice(["open-loop", "force"]), default="open-loop",
+              show_default=True, help="Controller of the prosthetic hand.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the partner.")
+@click.option("--record", "record_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a rerun recording (.rrd) here.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def handshake(design, skin_items, controller, seed, record_path, as_json) -> None:
+    """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
+    from softhand.envs.run import OVER_N, run_handshake
+    from softhand.envs.skins import parse_skins
+
+    overrides = _parse_skin_overrides(skin_items)
+    try:
+        parse_skins(design, overrides)
+        run = run_handshake(design=design, skins=overrides, controller=controller, seed=seed)
+    except ValueError as exc:
+        _fail(exc)
+    if record_path:
+        from softhand.viz import HandshakeFrames, record_handshake
+
+        frames = HandshakeFrames(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat,
+                                 run.region_force_N, run.region_names, run.skins, run.contacts,
+                                 run.phase)
+        record_handshake(record_path, run.model, frames)
+    summary = run.summary()
+    if as_json:
+        click.echo(json.dumps(summary, indent=1))
+        return
+    click.echo("| region | skin | peak N | mean N | > 2 N |\n|---|---|---|---|---|")
+    for region, v in summary["regions"].items():
+        mark = "yes" if v["peak_N"] > OVER_N else ""
+        click.echo(f"| {region} | {run.skins[region]} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
+                   f"{mark} |")
+    cmp = summary["paper_over_2N"]
+    click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
+    click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "
+               f"only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
+    click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
+               + (f"; recording: {record_path}" if record_path else ""))
 
 
 @main.group()

@@ -1,0 +1,78 @@
+"""Controllers of the prosthetic hand, for testing grasp control in the handshake.
+
+Both map an observation and the env's ``info`` to an action in ``[-1, 1]^6`` (finger motors,
+thumb flexion, thumb rotation; positive closes):
+
+* :class:`OpenLoopClose`: rotate the thumb into opposition, close every digit at a fixed speed
+  while the partner grips and shakes, open when it lets go (what a myoelectric user does with one
+  "close" signal).
+* :class:`ForceRegulating`: per digit, close until the mean force of that digit's regions reaches a
+  target grip force, open a little when over it (a proportional force loop on the region forces).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["CONTROLLERS", "ForceRegulating", "OpenLoopClose", "make_controller"]
+
+_DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
+_GRIPPING = ("grip", "shake")
+
+
+@dataclass
+class OpenLoopClose:
+    """Close at ``speed`` (fraction of the maximum) during the grip, open afterwards."""
+
+    speed: float = 0.6
+
+    def __post_init__(self) -> None:
+        if not 0 < self.speed <= 1:
+            raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
+
+    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
+        a = np.zeros(6)
+        if info["phase"] in _GRIPPING:
+            a[:5] = self.speed
+            a[5] = 1.0
+        elif info["phase"] in ("release", "return", "done"):
+            a[:] = -1.0
+        return a
+
+
+@dataclass
+class ForceRegulating:
+    """Hold ``target_N`` on each digit's most loaded region with a proportional speed command."""
+
+    target_N: float = 2.5
+    gain_per_N: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not self.target_N > 0:
+            raise ValueError(f"target_N = {self.target_N!r} must be > 0")
+        if not self.gain_per_N > 0:
+            raise ValueError(f"gain_per_N = {self.gain_per_N!r} must be > 0")
+
+    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
+        a = np.zeros(6)
+        if info["phase"] not in _GRIPPING:
+            a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
+            return a
+        forces = info["region_forces_N"]
+        for i, digit in enumerate(_DIGITS):
+            f = max(v for k, v in forces.items() if k.startswith(digit))
+            a[i] = np.clip(self.gain_per_N * (self.target_N - f), -1.0, 1.0)
+        a[5] = 1.0
+        return a
+
+
+CONTROLLERS = {"open-loop": OpenLoopClose, "force": ForceRegulating}
+
+
+def make_controller(name: str):
+    """``open-loop`` or ``force`` with default settings."""
+    if name not in CONTROLLERS:
+        raise ValueError(f"controller {name!r} is unknown; allowed: {', '.join(CONTROLLERS)}")
+    return CONTROLLERS[name]()

@@ -1,0 +1,225 @@
+"""``softhand/Handshake-v0``: a prosthetic hand with calibrated skins shakes hands with a human partner.
+
+The docstring of :class:`HandshakeEnv` is the specification.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+from gymnasium import spaces
+
+from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
+from softhand.envs.skins import add_skin_pairs, apply_skins, parse_skins
+from softhand.hands import (
+    SceneConfig,
+    partner_actuators,
+    partner_contact_pose,
+    partner_start_pose,
+    prosthetic_actuators,
+    regions,
+    scene_spec,
+)
+from softhand.skin.files import SHIPPED_DIR
+
+__all__ = ["DEFAULT_REWARD_WEIGHTS", "HandshakeEnv"]
+
+DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
+CONTACT_N = 0.05  # a region counts as touched above this force
+
+
+class HandshakeEnv(gym.Env):
+    """Handshake between a 6-motor prosthetic right hand and a scripted human partner hand.
+
+    The prosthetic hand (fixed, thumb up) wears a calibrated skin on each of the paper's 18 regions
+    (Fig. 1: Thumb1-2, Index1-3, Middle1-3, Ring1-3, Little1-3, Palm1-2, Back1-2; 1 = proximal).
+    The partner reaches, grips to a human grip force, shakes at 4 Hz, lets go and leaves
+    (:mod:`softhand.envs.partner`, published timings). Contact forces come from calibrated soft
+    contacts (skin in series with human tissue), read by one touch sensor per region.
+
+    Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
+    (positive closes; the maximum closes a digit from open in about 1 s):
+
+    ===== ====================================== =====
+    index actuator                               unit
+    ===== ====================================== =====
+    0-3   index, middle, ring, little finger      1 = full closing speed
+    4     thumb flexion                           1 = full closing speed
+    5     thumb rotation (towards opposition)     1 = full speed
+    ===== ====================================== =====
+
+    Observation space: ``Box(-inf, inf, (2 n + 19,), float64)`` with n the prosthetic hand's
+    joints (34 by default):
+
+    ================= ====================================================== ======
+    slice             quantity                                                unit
+    ================= ====================================================== ======
+    [0, n)            prosthetic joint positions                             rad
+    [n, 2n)           prosthetic joint velocities                            rad/s
+    [2n, 2n + 18)     normal contact force per region, in the order above    N
+    2n + 18           time since the start / handshake duration              1
+    ================= ====================================================== ======
+
+    Reward (weights are constructor arguments, defaults in ``DEFAULT_REWARD_WEIGHTS``):
+
+    * ``grip`` = -w_grip ((F_mean - F_h) / F_h)^2 while the partner grips or shakes, with F_mean the
+      mean force over touched regions (> 0.05 N) and F_h the partner's grip force (2.5 N, Melnyk et
+      al. 2014, times ``squeeze``): a human-like, matched grip;
+    * ``contact`` = +w_contact (touched regions / 18) in the same phases: a full-hand grip;
+    * ``overload`` = -w_overload sum_i max(0, F_i - overload_N)^2 at all times;
+    * ``effort`` = -w_effort |a|^2.
+
+    Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
+    simulation produces a non-finite state (then ``info["unstable"]`` is True).
+
+    ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
+    return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
+
+    Args:
+        design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or
+            ``rigid``; default: the most lifelike design).
+        skins: region -> skin overrides.
+        frame_skip: physics steps per action (1 ms each by default), >= 1.
+        timestep_s: physics timestep, in (0, 0.01] s.
+        squeeze: multiplier of the partner's grip force (5 for the hard case), > 0.
+        overload_N: region force above which the overload penalty applies.
+        reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries.
+        calibration_dir: folder of the skin calibration files (default: the shipped ones).
+        randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
+
+    Version history: v0 (softhand 0.1): first release.
+    """
+
+    metadata: ClassVar[dict] = {"render_modes": [], "render_fps": 100}
+
+    def __init__(self, *, design: str | None = None, skins: Mapping[str, str] | None = None,
+                 frame_skip: int = 10, timestep_s: float = 1e-3, squeeze: float = 1.0,
+                 overload_N: float = 10.0, reward_weights: Mapping[str, float] | None = None,
+                 calibration_dir: str | Path | None = None, randomize: bool = True) -> None:
+        if int(frame_skip) != frame_skip or frame_skip < 1:
+            raise ValueError(f"frame_skip = {frame_skip!r} must be an integer >= 1")
+        if not (np.isfinite(squeeze) and squeeze > 0):
+            raise ValueError(f"squeeze = {squeeze!r} must be finite and > 0")
+        if not (np.isfinite(overload_N) and overload_N > 0):
+            raise ValueError(f"overload_N = {overload_N!r} must be finite and > 0")
+        weights = dict(DEFAULT_REWARD_WEIGHTS)
+        for key, value in (reward_weights or {}).items():
+            if key not in weights:
+                raise ValueError(f"reward weight {key!r} is unknown; allowed: {', '.join(weights)}")
+            weights[key] = float(value)
+        self.weights = weights
+        self.skins = parse_skins(design, skins)
+        self.frame_skip = int(frame_skip)
+        self.squeeze = float(squeeze)
+        self.overload_N = float(overload_N)
+        self.randomize = randomize
+        self.config = SceneConfig(timestep_s=timestep_s)
+        spec = scene_spec(self.config)
+        add_skin_pairs(spec)
+        self.model = spec.compile()
+        apply_skins(self.model, self.skins, directory=calibration_dir or SHIPPED_DIR)
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self.region_names = tuple(self.skins)
+        infos = regions(m, "pro_")
+        self._sensor_adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id]
+                                     for r in self.region_names])
+        self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
+        self._pro_qpos = m.jnt_qposadr[self._pro_joints]
+        self._pro_dof = m.jnt_dofadr[self._pro_joints]
+        self._pro_act = np.array([m.actuator(a).id for a in prosthetic_actuators()])
+        self._max_speed = m.actuator_ctrlrange[self._pro_act, 1].copy()
+        hum = [m.actuator(a).id for a in partner_actuators()]
+        self._grip_act = np.array(hum[:5])
+        self._opp_act = hum[5]
+        self._mocap = m.body("hum_base").mocapid[0]
+        n = self._pro_joints.size
+        self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
+        self._timeline = Timeline()
+        self._script: PartnerScript | None = None
+
+    # --- gymnasium API -----------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        rng = self.np_random
+        factor = float(rng.uniform(0.95, 1.05)) if self.randomize else 1.0
+        grip = GRIP_FORCE_N * self.squeeze * (float(rng.uniform(0.9, 1.1)) if self.randomize
+                                              else 1.0)
+        phase = float(rng.uniform(0, 2 * np.pi)) if self.randomize else 0.0
+        start, quat = partner_start_pose(self.config)
+        contact, _ = partner_contact_pose(self.config)
+        lo = m.actuator_ctrlrange[self._grip_act, 0]
+        hi = m.actuator_ctrlrange[self._grip_act, 1]
+        self._script = PartnerScript(self._timeline.scaled(factor), start, contact,
+                                     grip_force_N=grip, shake_phase=phase, flex_range=(lo, hi))
+        d.mocap_pos[self._mocap] = start
+        d.mocap_quat[self._mocap] = quat
+        mujoco.mj_forward(m, d)
+        self._forces = np.zeros(len(self.region_names))
+        return self._obs(), self._info({}, "reach")
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (6,) or not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0 + 1e-6):
+            raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
+                             "space: 6 finite values in [-1, 1]")
+        if self._script is None:
+            raise RuntimeError("call reset() before step()")
+        m, d, script = self.model, self.data, self._script
+        d.ctrl[self._pro_act] = a * self._max_speed
+        dt = m.opt.timestep
+        for _ in range(self.frame_skip):
+            t = d.time
+            d.mocap_pos[self._mocap] = script.mount(t)
+            touched = self._forces > CONTACT_N
+            mean = float(self._forces[touched].mean()) if touched.any() else 0.0
+            d.ctrl[self._grip_act] = script.grip(t, mean, dt)
+            phase = script.timeline.phase(t)
+            d.ctrl[self._opp_act] = m.actuator_ctrlrange[self._opp_act, 1] * (
+                phase in ("grip", "shake"))
+            mujoco.mj_step(m, d)
+            self._forces = d.sensordata[self._sensor_adr].copy()
+        phase = script.timeline.phase(d.time)
+        unstable = not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)))
+        terms = self._reward_terms(a, phase)
+        reward = float(sum(terms.values())) if not unstable else -100.0
+        truncated = d.time >= script.timeline.total_s - 1e-9
+        info = self._info(terms, phase)
+        info["unstable"] = unstable
+        obs = self._obs() if not unstable else np.zeros(self.observation_space.shape)
+        return obs, reward, unstable, bool(truncated and not unstable), info
+
+    # --- helpers -----------------------------------------------------------------------------
+    def _obs(self) -> np.ndarray:
+        d = self.data
+        total = self._script.timeline.total_s if self._script else self._timeline.total_s
+        return np.concatenate([d.qpos[self._pro_qpos], d.qvel[self._pro_dof], self._forces,
+                               [d.time / total]])
+
+    def _reward_terms(self, a: np.ndarray, phase: str) -> dict[str, float]:
+        w, f = self.weights, self._forces
+        touched = f > CONTACT_N
+        terms = {"grip": 0.0, "contact": 0.0,
+                 "overload": -w["overload"] * float(np.sum(np.maximum(0.0, f - self.overload_N)
+                                                          ** 2)),
+                 "effort": -w["effort"] * float(a @ a)}
+        if phase in ("grip", "shake"):
+            target = self._script.grip_force_N
+            mean = float(f[touched].mean()) if touched.any() else 0.0
+            terms["grip"] = -w["grip"] * ((mean - target) / target) ** 2
+            terms["contact"] = w["contact"] * float(touched.mean())
+        return terms
+
+    def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:
+        return {"region_forces_N": dict(zip(self.region_names, map(float, self._forces),
+                                            strict=True)),
+                "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
+                "partner_grip_N": self._script.grip_force_N if self._script else None}

@@ -1,0 +1,115 @@
+"""Skins on the handshake scene: which design each region wears, and the contact pairs that carry it.
+
+Every prosthetic skin region meets every partner tissue geom through an explicit ``<pair>``; its law
+is the series combination of the region's skin and the partner's human tissue (both indent: the
+indentation of the pair is the sum of the two at the same force), fitted as one calibrated soft
+contact and scaled by the pair's inverse inertia (:mod:`softhand.skin.soft_contact`). A ``rigid``
+region leaves only the tissue's compliance. Laws come from the shipped calibration files; no FE run.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from softhand.hands import partner_tissue_geoms, regions
+from softhand.laws.references import HUMAN, PROSTHETIC
+from softhand.skin.calibrate import skin_names
+from softhand.skin.files import SHIPPED_DIR, load_calibration
+from softhand.skin.rig import apply_pair_law
+from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
+
+__all__ = ["DEFAULT_DESIGN", "SKIN_CHOICES", "add_skin_pairs", "apply_skins", "parse_skins",
+           "series_law"]
+
+DEFAULT_DESIGN = "pocket2-sil"  # the most lifelike design (calibration/skins/index.json ranking)
+SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
+
+
+def region_names() -> tuple[str, ...]:
+    from softhand.paper import paper
+
+    return tuple(paper()["handshake"]["regions"])
+
+
+def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None = None
+                ) -> dict[str, str]:
+    """Region -> skin: ``design`` everywhere (default the most lifelike), then ``overrides``.
+
+    Raises:
+        ValueError: an unknown region or skin, naming it and the allowed values.
+    """
+    names = region_names()
+    design = design or DEFAULT_DESIGN
+    if design not in SKIN_CHOICES:
+        raise ValueError(f"skin design {design!r} is unknown; allowed: {', '.join(SKIN_CHOICES)}")
+    out = dict.fromkeys(names, design)
+    for region, skin in (overrides or {}).items():
+        if region not in out:
+            raise ValueError(f"region {region!r} is unknown; allowed: {', '.join(names)}")
+        if skin not in SKIN_CHOICES:
+            raise ValueError(f"skin {skin!r} for region {region} is unknown; allowed: "
+                             f"{', '.join(SKIN_CHOICES)}")
+        out[region] = skin
+    return out
+
+
+def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_") -> list[str]:
+    """Add one pair per (prosthetic skin region, partner tissue geom); return their names."""
+    tissues = partner_tissue_geoms(spec, hum)
+    names = []
+    for info in regions(spec, pro).values():
+        for tissue in tissues:
+            name = f"{info.region}__{tissue}"
+            spec.add_pair(name=name, geomname1=info.geom, geomname2=tissue, condim=3,
+                          friction=[1.0, 1.0, 0.005, 0.0001, 0.0001])
+            names.append(name)
+    return names
+
+
+@functools.lru_cache(maxsize=32)
+def _soft(skin: str, directory: str) -> SoftContactParams:
+    return load_calibration(skin, directory).soft_contact
+
+
+@functools.lru_cache(maxsize=32)
+def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParams:
+    """The pair law of ``skin`` against human tissue (``rigid``: the tissue alone)."""
+    tissue = _soft(HUMAN, directory)
+    if skin == "rigid":
+        return tissue
+    own = _soft(skin, directory)
+    f = np.linspace(0.0, 2.5, 120)[1:]
+    d_skin = _invert(own, f)
+    d_tissue = _invert(tissue, f)
+    law, _ = fit_soft_contact(np.concatenate([[0.0], d_skin + d_tissue]),
+                              np.concatenate([[0.0], f]), initial=tissue if skin == PROSTHETIC
+                              else own, reference_mass_kg=own_mass())
+    return law
+
+
+def own_mass() -> float:
+    from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS
+
+    return CALIBRATION_MASS_KG * MASS_FACTORS[0]
+
+
+def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:
+    """Indentation (mm) at each force of a monotone soft-contact law (dense table)."""
+    d = np.linspace(0.0, 20.0, 20001)
+    f = params.force(d)
+    return np.interp(force_N, f, d)
+
+
+def apply_skins(model: mujoco.MjModel, skins: Mapping[str, str], *,
+                directory: str | Path = SHIPPED_DIR, pro: str = "pro_") -> None:
+    """Write each region's pair law into the compiled model (pairs from :func:`add_skin_pairs`)."""
+    for pid in range(model.npair):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
+        region, _, _ = name.partition("__")
+        if region in skins:
+            apply_pair_law(model, pid, series_law(skins[region], str(directory)))

@@ -1,0 +1,438 @@
+"""A rerun recording of a handshake: both hands, region forces on the skin, contacts, skin designs.
+
+One time line, ``sim_time`` (simulated time, s). Lengths in metres, forces in newtons, MuJoCo's
+world frame (right-handed, +Z up). Static geometry is logged once; per frame only transforms,
+colours, scalars, contacts and text are sent, each series in bulk with ``send_columns``.
+
+| entity path | archetype | logged | what it holds |
+|---|---|---|---|
+| ``world`` | ViewCoordinates | static | right-handed, +Z up |
+| ``world/bodies/{body}`` | Transform3D | per frame | world pose of a ``pro_*``/``hum_*`` body |
+| ``world/bodies/{body}/{geom}`` | a shape (1) | static | the geom in its body's frame, colour |
+| ``world/bodies/{body}/pro_skin_{region}`` | a shape (1) | colour per frame | see (2) |
+| ``world/contacts/points`` | Points3D | per frame | contact points, sized and coloured by force |
+| ``world/contacts/normals`` | Arrows3D | per frame | contact normals, ARROW_M_PER_N m per N |
+| ``forces/{region}`` | Scalars | per frame | the region's normal force, N |
+| ``skin/designs`` | TextDocument | static | Markdown table: region, body, skin design |
+| ``partner/phase`` | TextLog | at changes | partner phase (``reach``, ``grip``, ...) |
+
+(1) Capsules3D, Ellipsoids3D, Boxes3D or Cylinders3D, as the MuJoCo geom type (procedural hands
+have no meshes). (2) A region's skin geom: shape and label ``{region}: {design}`` static, colour
+force_colors(force) per frame. ``forces/{region}`` also holds a static SeriesLines (its name).
+Geom and body names are MuJoCo's (``{body}`` e.g. ``pro_index_proximal``, ``hum_base``); unnamed
+geoms are called ``geom{id}``. Body poses are world poses, so the body entities are flat (not nested
+along the kinematic tree).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
+
+from softhand.hands import regions
+
+__all__ = [
+    "ARROW_M_PER_N",
+    "HAND_PREFIXES",
+    "STANDOUT_FORCE_N",
+    "HandshakeFrames",
+    "force_colors",
+    "read_recording_summary",
+    "record_handshake",
+]
+
+#: Name prefixes of the bodies drawn: the prosthetic hand and the partner hand.
+HAND_PREFIXES: tuple[str, ...] = ("pro_", "hum_")
+#: Fig. 4 of the paper marks the regions whose handshake force exceeds 2 N
+#: (``paper()["handshake"]["over_2N"]``); above it the force colours turn warm.
+STANDOUT_FORCE_N = 2.0
+#: Length of a contact-normal arrow per newton of normal force (m/N).
+ARROW_M_PER_N = 0.01
+#: Contact point radius (m) at 0 N and its increase at max_force_N.
+_POINT_RADIUS_M = (0.001, 0.003)
+#: Force colour ramps (RGB): 0 N -> STANDOUT_FORCE_N pale to blue; above it orange to red.
+_COOL = (np.array([215.0, 210.0, 200.0]), np.array([70.0, 110.0, 200.0]))
+_WARM = (np.array([255.0, 170.0, 0.0]), np.array([200.0, 0.0, 0.0]))
+_TIMELINE = "sim_time"
+
+
+@dataclass(frozen=True)
+class HandshakeFrames:
+    """What to record, frame by frame; validated (shapes, finiteness) on construction.
+
+    Attributes:
+        time_s: (T,) simulated time of each frame, s, strictly increasing.
+        qpos: (T, nq) joint positions.
+        mocap_pos: (T, nmocap, 3) mocap body positions, m.
+        mocap_quat: (T, nmocap, 4) mocap body quaternions (w, x, y, z).
+        region_force_N: (T, R) normal force per region, N, columns in the order of region_names.
+        region_names: the R region names (the prosthetic hand's 18 regions).
+        skin_designs: region -> skin design name (e.g. ``"pocket2-sil"``, ``"rigid"``).
+        contacts: per frame an (n_i, 7) array: position xyz (m), normal xyz, normal force (N).
+        phase: per frame the partner's phase (``"reach"``, ``"grip"``, ...), or None.
+    """
+
+    time_s: np.ndarray
+    qpos: np.ndarray
+    mocap_pos: np.ndarray
+    mocap_quat: np.ndarray
+    region_force_N: np.ndarray
+    region_names: tuple[str, ...]
+    skin_designs: dict[str, str]
+    contacts: list[np.ndarray]
+    phase: list[str] | None = None
+
+    def __post_init__(self) -> None:
+        time_s = _checked("time_s", self.time_s, (None,))
+        n, steps = time_s.size, np.diff(time_s)
+        if n == 0 or np.any(steps <= 0):
+            i = int(np.argmax(steps <= 0)) if n else 0
+            raise ValueError(
+                f"time_s must hold >= 1 strictly increasing times; {time_s[i : i + 2]}"
+            )
+        names = tuple(self.region_names)
+        if not all(isinstance(r, str) for r in names) or len(set(names)) != len(names):
+            raise ValueError(f"region_names = {names!r}: expected distinct strings")
+        designs = dict(self.skin_designs)
+        missing, unknown = sorted(set(names) - set(designs)), sorted(set(designs) - set(names))
+        if missing or unknown or not all(isinstance(d, str) and d for d in designs.values()):
+            raise ValueError(
+                f"skin_designs = {designs!r}: expected one name per region; "
+                f"missing {missing}, unknown {unknown}"
+            )
+        if len(self.contacts) != n:
+            raise ValueError(f"contacts: {len(self.contacts)} frames, time_s has {n}")
+        contacts = [
+            np.reshape(c, (0, 7)) if np.size(c) == 0 else _checked(f"contacts[{i}]", c, (None, 7))
+            for i, c in enumerate(self.contacts)
+        ]
+        for i, c in enumerate(contacts):
+            if np.any(c[:, 6] < 0):
+                raise ValueError(f"contacts[{i}]: negative normal force {c[:, 6].min()} N")
+        phase = None if self.phase is None else list(self.phase)
+        if phase is not None and (len(phase) != n or not all(isinstance(p, str) for p in phase)):
+            raise ValueError(f"phase: expected {n} strings (one per frame), got {len(phase)}")
+        mocap_pos = _checked("mocap_pos", self.mocap_pos, (n, None, 3))
+        fields = {
+            "time_s": time_s,
+            "qpos": _checked("qpos", self.qpos, (n, None)),
+            "mocap_pos": mocap_pos,
+            "mocap_quat": _checked("mocap_quat", self.mocap_quat, (n, mocap_pos.shape[1], 4)),
+            "region_force_N": _checked("region_force_N", self.region_force_N, (n, len(names))),
+            "region_names": names,
+            "skin_designs": designs,
+            "contacts": contacts,
+            "phase": phase,
+        }
+        for key, value in fields.items():
+            object.__setattr__(self, key, value)
+
+
+def _checked(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+    """``value`` as a finite float array of ``shape`` (None: any length), else ValueError."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"{name}: not a numeric array ({err})") from err
+    if arr.ndim != len(shape) or any(
+        s is not None and s != k for s, k in zip(shape, arr.shape, strict=False)
+    ):
+        want = ", ".join("*" if s is None else str(s) for s in shape)
+        raise ValueError(f"{name}: shape {arr.shape}, expected ({want})")
+    if not np.all(np.isfinite(arr)):
+        where = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
+        raise ValueError(f"{name}: non-finite value {arr[where]} at index {where}")
+    return arr
+
+
+def force_colors(
+    force_N: np.ndarray | float, *, max_force_N: float = 5.0, standout_N: float = STANDOUT_FORCE_N
+) -> np.ndarray:
+    """RGBA colours (uint8, shape ``force_N.shape + (4,)``) for normal forces.
+
+    From 0 N to ``standout_N`` a cool ramp, pale grey to blue; above ``standout_N`` a warm ramp,
+    orange to red at ``max_force_N`` and beyond, so that regions over 2 N stand out.
+
+    Raises:
+        ValueError: if ``max_force_N`` or ``standout_N`` is not a positive finite number.
+    """
+    for name, value in (("max_force_N", max_force_N), ("standout_N", standout_N)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} = {value}: expected a positive finite force in N")
+    f = np.asarray(force_N, dtype=float)
+    cool = np.clip(f / standout_N, 0.0, 1.0)[..., None]
+    span = max_force_N - standout_N
+    warm = (np.clip((f - standout_N) / span, 0.0, 1.0) if span > 0 else np.ones_like(f))[..., None]
+    rgb = np.where(
+        (f > standout_N)[..., None],
+        _WARM[0] + warm * (_WARM[1] - _WARM[0]),
+        _COOL[0] + cool * (_COOL[1] - _COOL[0]),
+    )
+    alpha = np.full(f.shape + (1,), 255.0)
+    return np.round(np.concatenate([rgb, alpha], axis=-1)).astype(np.uint8)
+
+
+def _path(*parts: str) -> str:
+    """An entity path from raw name parts (escaped where rerun needs it)."""
+    return "/".join(rr.escape_entity_path_part(p) for p in parts)
+
+
+def _xyzw(quat_wxyz: np.ndarray) -> np.ndarray:
+    """MuJoCo (w, x, y, z) quaternions -> rerun (x, y, z, w)."""
+    return np.asarray(quat_wxyz)[..., [1, 2, 3, 0]]
+
+
+def _geom_shape(model: mujoco.MjModel, g: int) -> tuple[type, dict[str, Any]] | None:
+    """rerun archetype and fields (no colour) of geom ``g`` in its body's frame; None: not drawn."""
+    kind, size, pos = int(model.geom_type[g]), model.geom_size[g], model.geom_pos[g]
+    rot = np.empty(9)
+    mujoco.mju_quat2Mat(rot, model.geom_quat[g])
+    rot = rot.reshape(3, 3)
+    pose = {"quaternions": [_xyzw(model.geom_quat[g])], "fill_mode": rr.components.FillMode.Solid}
+    geom = mujoco.mjtGeom
+    if kind in (geom.mjGEOM_SPHERE, geom.mjGEOM_ELLIPSOID):
+        half = [size[0]] * 3 if kind == geom.mjGEOM_SPHERE else size
+        return rr.Ellipsoids3D, {"half_sizes": [half], "centers": [pos], **pose}
+    if kind == geom.mjGEOM_BOX:
+        return rr.Boxes3D, {"half_sizes": [size], "centers": [pos], **pose}
+    axial = {"lengths": [2 * size[1]], "radii": [size[0]]}  # MuJoCo: radius, half-length
+    if kind == geom.mjGEOM_CAPSULE:  # rerun: from the translation along +Z; MuJoCo: centred
+        return rr.Capsules3D, {**axial, "translations": [pos - size[1] * rot[:, 2]], **pose}
+    if kind == geom.mjGEOM_CYLINDER:
+        return rr.Cylinders3D, {**axial, "centers": [pos], **pose}
+    return None  # planes, meshes, height fields, SDFs: not in the procedural hands
+
+
+def _validate(path: Path, model: mujoco.MjModel, frames: HandshakeFrames, max_force_N: float):
+    if path.suffix != ".rrd":
+        raise ValueError(f"path = {str(path)!r}: expected a file name ending in .rrd")
+    if not path.parent.is_dir():
+        raise ValueError(f"path = {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    if not (math.isfinite(max_force_N) and max_force_N > 0):
+        raise ValueError(f"max_force_N = {max_force_N}: expected a positive finite force in N")
+    if frames.qpos.shape[1] != model.nq:
+        raise ValueError(f"qpos: {frames.qpos.shape[1]} columns, model.nq = {model.nq}")
+    if frames.mocap_pos.shape[1] != model.nmocap:
+        raise ValueError(f"mocap_pos: {frames.mocap_pos.shape[1]} bodies, nmocap = {model.nmocap}")
+    expected = set(regions(model, "pro_"))
+    names = set(frames.region_names)
+    if names != expected:
+        raise ValueError(
+            f"region_names: {len(names)} regions, the model has {len(expected)}; "
+            f"missing {sorted(expected - names)}, unknown {sorted(names - expected)}"
+        )
+
+
+def _body_poses(
+    model: mujoco.MjModel, frames: HandshakeFrames, bodies: list[int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """World positions (T, B, 3) and (x, y, z, w) quaternions (T, B, 4) from mj_kinematics."""
+    data = mujoco.MjData(model)
+    n = frames.time_s.size
+    pos, quat = np.empty((n, len(bodies), 3)), np.empty((n, len(bodies), 4))
+    for i in range(n):
+        data.qpos[:] = frames.qpos[i]
+        data.mocap_pos[:] = frames.mocap_pos[i]
+        data.mocap_quat[:] = frames.mocap_quat[i]
+        mujoco.mj_kinematics(model, data)
+        pos[i], quat[i] = data.xpos[bodies], _xyzw(data.xquat[bodies])
+    return pos, quat
+
+
+def _blueprint() -> rrb.Blueprint:
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin="world", name="handshake"),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin="forces", name="region forces (N)"),
+                rrb.TextDocumentView(origin="skin", name="skin designs"),
+                rrb.TextLogView(origin="partner", name="partner phase"),
+            ),
+        ),
+        collapse_panels=True,
+    )
+
+
+def _log_recording(
+    rec: rr.RecordingStream, model: mujoco.MjModel, frames: HandshakeFrames, max_force_N: float
+) -> None:
+    """Log the static scene, then every per-frame series in bulk (strict: errors raise)."""
+    log, send = partial(rec.log, strict=True), partial(rec.send_columns, strict=True)
+    time = [rr.TimeColumn(_TIMELINE, duration=frames.time_s)]
+    info = regions(model, "pro_")
+    skin = {info[r].geom: r for r in frames.region_names}
+    forces = {r: frames.region_force_N[:, k] for k, r in enumerate(frames.region_names)}
+    log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+
+    bodies = [b for b in range(model.nbody) if model.body(b).name.startswith(HAND_PREFIXES)]
+    for g in range(model.ngeom):
+        body = model.body(model.geom_bodyid[g]).name
+        shape = _geom_shape(model, g) if body.startswith(HAND_PREFIXES) else None
+        if shape is None:
+            continue
+        archetype, fields = shape
+        name = model.geom(g).name or f"geom{g}"
+        entity = _path("world", "bodies", body, name)
+        region = skin.get(name)
+        if region is None:  # a plain geom: static colour
+            rgba = model.geom_rgba[g]
+            fields["colors"] = [np.round(255 * rgba).astype(np.uint8)]
+            log(entity, archetype.from_fields(**fields), static=True)
+            continue
+        fields["labels"] = [f"{region}: {frames.skin_designs[region]}"]
+        log(entity, archetype.from_fields(**fields), static=True)
+        colors = force_colors(forces[region], max_force_N=max_force_N)
+        send(entity, time, archetype.columns(colors=colors))
+
+    pos, quat = _body_poses(model, frames, bodies)
+    for k, b in enumerate(bodies):
+        entity = _path("world", "bodies", model.body(b).name)
+        send(entity, time, rr.Transform3D.columns(translation=pos[:, k], quaternion=quat[:, k]))
+
+    for region, force in forces.items():
+        entity = _path("forces", region)
+        log(entity, rr.SeriesLines(names=region), static=True)
+        send(entity, time, rr.Scalars.columns(scalars=force))
+
+    table = ["| region | body | skin design |", "|---|---|---|"]
+    table += [f"| {r} | {info[r].body} | {frames.skin_designs[r]} |" for r in frames.region_names]
+    text = "# Skin design per region\n\n" + "\n".join(table) + "\n"
+    log("skin/designs", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+
+    lengths = np.array([len(c) for c in frames.contacts])
+    if lengths.sum() > 0:
+        c = np.concatenate(frames.contacts)
+        force = c[:, 6]
+        norm = np.linalg.norm(c[:, 3:6], axis=1, keepdims=True)
+        unit = np.divide(c[:, 3:6], norm, out=np.zeros_like(c[:, 3:6]), where=norm > 0)
+        colors = force_colors(force, max_force_N=max_force_N)
+        radii = _POINT_RADIUS_M[0] + _POINT_RADIUS_M[1] * np.clip(force / max_force_N, 0, 1)
+        points = rr.Points3D.columns(positions=c[:, :3], radii=radii, colors=colors)
+        arrows = rr.Arrows3D.columns(
+            origins=c[:, :3], vectors=unit * force[:, None] * ARROW_M_PER_N, colors=colors
+        )
+        send("world/contacts/points", time, points.partition(lengths))
+        send("world/contacts/normals", time, arrows.partition(lengths))
+
+    if frames.phase is not None:
+        changes = [0] + [
+            i for i in range(1, len(frames.phase)) if frames.phase[i] != frames.phase[i - 1]
+        ]
+        send(
+            "partner/phase",
+            [rr.TimeColumn(_TIMELINE, duration=frames.time_s[changes])],
+            rr.TextLog.columns(text=[frames.phase[i] for i in changes]),
+        )
+
+
+def record_handshake(
+    path: str | Path,
+    model: mujoco.MjModel,
+    frames: HandshakeFrames,
+    *,
+    application_id: str = "softhand_handshake",
+    max_force_N: float = 5.0,
+) -> Path:
+    """Write a rerun recording (.rrd) of a handshake; the entity paths are in the module docstring.
+
+    The file is written atomically: to a temporary file in the same folder, then renamed, so a
+    failure leaves no partial file behind.
+
+    Args:
+        path: the .rrd file to write (its folder must exist); replaced if present.
+        model: the compiled handshake scene (softhand.hands.scene_spec().compile()).
+        frames: what to record, frame by frame.
+        application_id: rerun application id of the recording.
+        max_force_N: force (N) at the red end of the force colours.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: if ``frames`` does not fit ``model`` (qpos width, mocap count, regions), the
+            path is not a .rrd file in an existing folder, or ``max_force_N`` is not positive.
+        RuntimeError: if rerun logging is disabled (environment variable ``RERUN=off``).
+    """
+    path = Path(path)
+    _validate(path, model, frames, max_force_N)
+    rec = rr.RecordingStream(application_id, send_properties=True)
+    if not rec.is_enabled():
+        raise RuntimeError("rerun logging is disabled (environment variable RERUN)")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        rec.save(tmp, default_blueprint=_blueprint())
+        _log_recording(rec, model, frames, max_force_N)
+        rec.flush()
+        rec.disconnect()
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600
+        os.replace(tmp, path)
+    except BaseException:
+        rec.disconnect()
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_recording_summary(path: str | Path) -> dict[str, Any]:
+    """What a saved recording holds, per entity path: for tests and for users checking a file.
+
+    Returns:
+        ``{"application_id": str, "recording_id": str, "timelines": [names],
+        "entities": {path: {"static": [components], "temporal": [components],
+        "sim_time_points": number of distinct sim_time values}},
+        "texts": {path: text of its static TextDocument}}``; entity paths without the leading
+        ``/``, components as ``"Archetype:field"`` (e.g. ``"Scalars:scalars"``).
+
+    Raises:
+        FileNotFoundError: if ``path`` does not exist.
+        ValueError: if ``path`` is not a readable rerun recording.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"recording {str(path)!r} not found")
+    try:
+        reader = RrdReader(path)
+        store = reader.recordings()[0]
+        chunks = list(reader.stream(store=store))
+    except Exception as err:
+        raise ValueError(f"{str(path)!r} is not a readable rerun recording: {err}") from err
+    entities: dict[str, dict[str, Any]] = {}
+    times: dict[str, set[int]] = {}
+    texts: dict[str, str] = {}
+    timelines: set[str] = set()
+    for chunk in chunks:
+        entity = chunk.entity_path.lstrip("/")
+        batch = chunk.to_record_batch()
+        names = set(chunk.timeline_names)
+        timelines |= names
+        components = [
+            c for c in batch.schema.names if c not in names and not c.startswith("rerun.")
+        ]
+        entry = entities.setdefault(entity, {"static": set(), "temporal": set()})
+        entry["static" if chunk.is_static else "temporal"].update(components)
+        if _TIMELINE in names:
+            values = batch.column(_TIMELINE).to_numpy(zero_copy_only=False).astype("int64")
+            times.setdefault(entity, set()).update(values.tolist())
+        if chunk.is_static and "TextDocument:text" in components:
+            value = batch.column("TextDocument:text").to_pylist()[-1]
+            texts[entity] = value[0] if isinstance(value, list) else value
+    for e, entry in entities.items():
+        entry.update({k: sorted(entry[k]) for k in ("static", "temporal")})
+        entry["sim_time_points"] = len(times.get(e, ()))
+    ids = {"application_id": store.application_id, "recording_id": store.recording_id}
+    entities = dict(sorted(entities.items()))
+    return {**ids, "timelines": sorted(timelines), "entities": entities, "texts": texts}

@@ -1,0 +1,228 @@
+"""The handshake recording: what is written to the .rrd, read back with rerun's RrdReader."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import mujoco
+import numpy as np
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+
+from softhand.hands import regions, scene_spec
+from softhand.paper import paper
+from softhand.viz import (
+    HandshakeFrames,
+    force_colors,
+    read_recording_summary,
+    record_handshake,
+    recording,
+)
+
+REGIONS = tuple(paper()["handshake"]["regions"])
+N_FRAMES = 100
+
+
+@pytest.fixture(scope="module")
+def model() -> mujoco.MjModel:
+    return scene_spec().compile()
+
+
+def synthetic_frames(model: mujoco.MjModel, n: int) -> HandshakeFrames:
+    """qpos0 with the index MCP flexing, the partner base shaking at 4 Hz, sine forces."""
+    t = np.arange(n) * 0.01
+    qpos = np.tile(model.qpos0, (n, 1))
+    qpos[:, model.joint("pro_index_mcp").qposadr[0]] = 0.6 * (1 - np.cos(2 * np.pi * t))
+    mocap_pos = np.tile(model.body_pos[model.body("hum_base").id], (n, 1, 1))
+    mocap_pos[:, 0, 2] += 0.01 * np.sin(2 * np.pi * 4.0 * t)
+    mocap_quat = np.tile(model.body_quat[model.body("hum_base").id], (n, 1, 1))
+    k = np.arange(len(REGIONS))
+    forces = 2.5 + 2.5 * np.sin(2 * np.pi * t[:, None] + k[None, :])
+    contacts = []
+    for i in range(n):
+        m = i % 4  # 0 to 3 contacts per frame
+        c = np.zeros((m, 7))
+        c[:, 0] = 0.3 + 0.01 * np.arange(m)
+        c[:, 4] = 1.0
+        c[:, 6] = 1.0 + i / n
+        contacts.append(c)
+    phases = ["reach", "grip", "shake", "release"]
+    return HandshakeFrames(
+        time_s=t,
+        qpos=qpos,
+        mocap_pos=mocap_pos,
+        mocap_quat=mocap_quat,
+        region_force_N=forces,
+        region_names=REGIONS,
+        skin_designs={r: ("rigid" if r.startswith("Back") else "pocket2-sil") for r in REGIONS},
+        contacts=contacts,
+        phase=[phases[4 * i // n] for i in range(n)],
+    )
+
+
+@pytest.fixture(scope="module")
+def recorded(model, tmp_path_factory):
+    path = tmp_path_factory.mktemp("rrd") / "handshake.rrd"
+    frames = synthetic_frames(model, N_FRAMES)
+    assert record_handshake(path, model, frames) == path
+    return path, frames
+
+
+@pytest.fixture(scope="module")
+def summary(recorded):
+    return read_recording_summary(recorded[0])
+
+
+def test_file_is_complete_and_alone(recorded, summary):
+    path, _ = recorded
+    assert [p.name for p in path.parent.iterdir()] == ["handshake.rrd"]
+    assert len(RrdReader(path).store()) > 0  # the footer/manifest was written
+    assert summary["application_id"] == "softhand_handshake"
+    assert "sim_time" in summary["timelines"]
+
+
+def test_region_force_series(summary):
+    for region in REGIONS:
+        entry = summary["entities"][f"forces/{region}"]
+        assert "Scalars:scalars" in entry["temporal"]
+        assert entry["sim_time_points"] == N_FRAMES
+
+
+def test_body_transforms_match_mujoco(model, recorded, summary):
+    path, frames = recorded
+    body = "pro_index_middle"  # moves with the index MCP
+    entity = f"world/bodies/{body}"
+    assert "Transform3D:translation" in summary["entities"][entity]["temporal"]
+    assert summary["entities"][entity]["sim_time_points"] == N_FRAMES
+    (chunk,) = [c for c in RrdReader(path).stream() if c.entity_path == "/" + entity]
+    batch = chunk.to_record_batch()
+    pos = np.array(batch.column("Transform3D:translation").to_pylist()).reshape(-1, 3)
+    quat = np.array(batch.column("Transform3D:quaternion").to_pylist()).reshape(-1, 4)
+    data = mujoco.MjData(model)
+    want_pos, want_quat = np.empty((N_FRAMES, 3)), np.empty((N_FRAMES, 4))
+    for i in range(N_FRAMES):
+        data.qpos[:] = frames.qpos[i]
+        mujoco.mj_kinematics(model, data)
+        want_pos[i], want_quat[i] = data.body(body).xpos, data.body(body).xquat[[1, 2, 3, 0]]
+    np.testing.assert_allclose(pos, want_pos, atol=1e-6)
+    np.testing.assert_allclose(quat, want_quat, atol=1e-6)
+    assert np.ptp(pos, axis=0).max() > 0.01  # the finger moves
+
+
+def test_skin_geometry_labels_and_colours(model, summary):
+    info = regions(model, "pro_")["Index1"]
+    entry = summary["entities"][f"world/bodies/{info.body}/{info.geom}"]
+    assert "Ellipsoids3D:half_sizes" in entry["static"]
+    assert "Ellipsoids3D:labels" in entry["static"]
+    assert "Ellipsoids3D:colors" in entry["temporal"]
+    assert entry["sim_time_points"] == N_FRAMES
+    bones = [e for e in summary["entities"] if e.startswith("world/bodies/hum_") and "bone" in e]
+    assert bones and all("Capsules3D:lengths" in summary["entities"][e]["static"] for e in bones)
+
+
+def test_contacts_designs_and_phase(summary):
+    points = summary["entities"]["world/contacts/points"]
+    assert "Points3D:positions" in points["temporal"]
+    assert points["sim_time_points"] == N_FRAMES
+    assert "Arrows3D:vectors" in summary["entities"]["world/contacts/normals"]["temporal"]
+    text = summary["texts"]["skin/designs"]
+    assert "| Index1 |" in text and "pocket2-sil" in text and "rigid" in text
+    assert summary["entities"]["partner/phase"]["sim_time_points"] == 4  # one per change
+
+
+def test_force_colors_stand_out_over_2n():
+    colors = force_colors(np.array([0.0, 1.9, 2.1, 5.0, 9.0]), max_force_N=5.0)
+    assert colors.shape == (5, 4) and colors.dtype == np.uint8
+    assert np.all(colors[0, :3] > 190)  # pale at 0 N
+    assert colors[1, 2] > colors[1, 0]  # bluish just below 2 N
+    warm = colors[2:]
+    assert np.all(warm[:, 0] > warm[:, 2])  # reddish above 2 N
+    np.testing.assert_array_equal(colors[3], colors[4])  # saturates at max_force_N
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"region_force_N": np.zeros((N_FRAMES, 17))}, "region_force_N"),
+        ({"qpos": np.zeros((N_FRAMES - 1, 34))}, "qpos"),
+        ({"contacts": []}, "contacts"),
+        ({"phase": ["grip"]}, "phase"),
+        ({"time_s": np.zeros(N_FRAMES)}, "time_s"),
+    ],
+)
+def test_bad_frames_raise(model, change, message):
+    frames = synthetic_frames(model, N_FRAMES)
+    with pytest.raises(ValueError, match=message):
+        dataclasses.replace(frames, **change)
+
+
+def test_bad_input_for_the_model_raises(model, tmp_path):
+    frames = synthetic_frames(model, 10)
+    few = REGIONS[:-1]
+    wrong = dataclasses.replace(
+        frames,
+        region_names=few,
+        region_force_N=frames.region_force_N[:, :-1],
+        skin_designs={r: "rigid" for r in few},
+    )
+    with pytest.raises(ValueError, match=r"region_names: 17 regions.*missing \['Back2'\]"):
+        record_handshake(tmp_path / "a.rrd", model, wrong)
+    with pytest.raises(ValueError, match="qpos: 33 columns"):
+        record_handshake(
+            tmp_path / "b.rrd", model, dataclasses.replace(frames, qpos=frames.qpos[:, 1:])
+        )
+    with pytest.raises(ValueError, match="max_force_N"):
+        record_handshake(tmp_path / "c.rrd", model, frames, max_force_N=0.0)
+    with pytest.raises(ValueError, match=r"\.rrd"):
+        record_handshake(tmp_path / "d.txt", model, frames)
+    assert list(tmp_path.iterdir()) == []  # nothing written, no temporary file left
+
+
+def test_failed_recording_leaves_no_file(model, tmp_path, monkeypatch):
+    def fail(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(recording, "_log_recording", fail)
+    with pytest.raises(RuntimeError, match="disk full"):
+        record_handshake(tmp_path / "x.rrd", model, synthetic_frames(model, 5))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_summary_of_a_bad_file_raises(tmp_path):
+    (tmp_path / "junk.rrd").write_bytes(b"not a recording")
+    with pytest.raises(ValueError, match="not a readable rerun recording"):
+        read_recording_summary(tmp_path / "junk.rrd")
+    with pytest.raises(FileNotFoundError):
+        read_recording_summary(tmp_path / "missing.rrd")
+
+
+def test_capsule_ends_match_mujoco(model):
+    """rerun capsules start at their translation; MuJoCo's are centred on the geom."""
+    g = model.geom("hum_bone_index_proximal").id
+    archetype, fields = recording._geom_shape(model, g)
+    assert archetype is rr.Capsules3D
+    start, length = np.asarray(fields["translations"][0]), fields["lengths"][0]
+    x, y, z, w = fields["quaternions"][0]
+    rot = np.empty(9)
+    mujoco.mju_quat2Mat(rot, [w, x, y, z])
+    end = start + rot.reshape(3, 3) @ [0.0, 0.0, length]
+    half = model.geom_size[g][1] * rot.reshape(3, 3)[:, 2]
+    np.testing.assert_allclose(start, model.geom_pos[g] - half, atol=1e-12)
+    np.testing.assert_allclose(end, model.geom_pos[g] + half, atol=1e-12)
+    assert fields["radii"][0] == model.geom_size[g][0]
+
+
+def test_recording_time_4000_frames(model, tmp_path, record_property):
+    """Not a speed test: reports how long 4000 frames take (run with -s to see it)."""
+    frames = synthetic_frames(model, 4000)
+    start = time.perf_counter()
+    record_handshake(tmp_path / "long.rrd", model, frames)
+    seconds = time.perf_counter() - start
+    record_property("record_4000_frames_s", seconds)
+    print(f"\nrecord_handshake, 4000 frames: {seconds:.2f} s")
+    assert (
+        read_recording_summary(tmp_path / "long.rrd")["entities"]["forces/Back2"]["sim_time_points"]
+        == 4000
+    )
