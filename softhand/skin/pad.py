@@ -85,7 +85,8 @@ class PadParams:
             compliance is taken out of the pad's spring so that pad + contact give the law.
         max_compression_mm: joint limit (the bone under the skin).
         damping_scale: per-branch multipliers of the analytic damping, fitted in the rig.
-        pad_mass_kg: mass of the pad body.
+        pad_mass_kg: mass of the pad body (5 g, about a fingertip pulp; 2 g let the stiff
+            contact chatter for one step at the end of a ramp, which a 5 g pad does not).
         n_knots: pieces of the branches' piecewise-linear law (branch dofs per Prony term).
     """
 
@@ -94,7 +95,7 @@ class PadParams:
     contact_stiffness: float
     max_compression_mm: float
     damping_scale: tuple[float, ...] = ()
-    pad_mass_kg: float = 2e-3
+    pad_mass_kg: float = 5e-3
     n_knots: int = 6
 
     def __post_init__(self) -> None:

@@ -38,9 +38,6 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
     """Calibrate ``names``, write one file each and ``index.json``; return the summary."""
     from tqdm import tqdm
 
-    from softhand.fem.sweep import git_revision
-    from softhand.laws.lifelike import lifelike_ranking
-
     out = Path(out_dir) if out_dir else SHIPPED_DIR
     fe = str(fe_dir) if fe_dir else str(FE_DIR)
     jobs = min(len(names), jobs or os.cpu_count() or 1)
@@ -60,38 +57,45 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
                 bar.update()
     bar.close()
     for n in names:
-        save_calibration(cals[n], out)
+        save_calibration(_merged(cals[n], out), out)
+    return rebuild_index(out, representations)
+
+
+def rebuild_index(out: str | Path = SHIPPED_DIR,
+                  representations: tuple[str, ...] | None = None) -> dict[str, Any]:
+    """Write ``index.json`` from every calibration file in ``out``; return it."""
+    from softhand.fem.sweep import git_revision
+    from softhand.laws.lifelike import lifelike_ranking
+    from softhand.skin.files import load_calibration, shipped_skins
+
+    out = Path(out)
+    cals = {n: load_calibration(n, out) for n in shipped_skins(out)}
     summary: dict[str, Any] = {
         "skins": {n: {r: {m: v.to_dict()[m] for m in METRICS + EXTRA if m in v.to_dict()}
-                      for r, v in cals[n].representations.items()} for n in names},
-        "laws": {n: {"fitted": [e.to_dict() for e in cals[n].law.fitted],
-                     "validated": [e.to_dict() for e in cals[n].law.validated],
-                     "prony": cals[n].law.prony.to_dict()} for n in names},
+                      for r, v in c.representations.items()} for n, c in cals.items()},
+        "laws": {n: {"fitted": [e.to_dict() for e in c.law.fitted],
+                     "validated": [e.to_dict() for e in c.law.validated],
+                     "prony": c.law.prony.to_dict()} for n, c in cals.items()},
         "lifelike": [r.to_dict() for r in lifelike_ranking({n: c.law for n, c in cals.items()})],
         "provenance": {"softhand_version": __version__, "git_revision": git_revision(),
                        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                       "representations": list(representations)},
+                       "last_representations": list(representations or ())},
     }
-    index = out / "index.json"
-    atomic_write_json(index, _merge_index(index, summary))
+    atomic_write_json(out / "index.json", summary)
     return summary
 
 
-def _merge_index(path: Path, new: dict[str, Any]) -> dict[str, Any]:
-    """Keep entries of skins not recalibrated this time (calibrating one skin keeps the others)."""
-    import json
+def _merged(cal: SkinCalibration, out: Path) -> SkinCalibration:
+    """Keep representations of an existing file that were not recalibrated this time."""
+    from softhand.skin.files import load_calibration
 
-    if not path.exists():
-        return new
     try:
-        old = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return new
-    for key in ("skins", "laws"):
-        merged = dict(old.get(key, {}))
-        merged.update(new[key])
-        new[key] = merged
-    return new
+        old = load_calibration(cal.design, out)
+    except ValueError:
+        return cal
+    reps = {k: v for k, v in old.representations.items() if k not in cal.representations}
+    reps.update(cal.representations)
+    return SkinCalibration(cal.design, cal.law, reps, cal.provenance)
 
 
 def summary_table(summary: dict[str, Any]) -> str:

@@ -111,13 +111,15 @@ class SoftContactParams:
 
 
 def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
-                     reference_mass_kg: float = 0.02) -> tuple[SoftContactParams, float]:
+                     reference_mass_kg: float = 0.02,
+                     initial: SoftContactParams | None = None) -> tuple[SoftContactParams, float]:
     """Fit the rest law F(r) to a force-indentation curve; return params and RMS error (N).
 
     The damping is set, not fitted: ``damping_ratio`` of critical for ``reference_mass_kg`` on the
     law's end stiffness (N s/m at full impedance; it adds ``damping * rate`` to the force). Use the
     lightest body the skin will touch: contact damping is explicit under ``implicitfast``, so a
-    damping set for a heavier body makes a light one unstable.
+    damping set for a heavier body makes a light one unstable. ``initial`` replaces the
+    multi-start search by one start (a close law, e.g. the skin's own when fitting skin + tissue).
     """
     d, f = paired_arrays(delta_mm, force_N, ("delta_mm", "force_N"), min_size=5)
     keep = d > 0
@@ -141,10 +143,14 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
 
     r = d * 1e-3
     best = None
-    starts = [(dw0, mid0, pw0) for dw0 in (0.05, 0.3) for mid0 in (0.2, 0.45, 0.7, 0.9)
-              for pw0 in (1.5, 4.0, 10.0)]  # the sigmoid's shape is not convex to fit
-    for dw0, mid0, pw0 in starts:
-        x0 = np.array([np.log(secant_end), dw0, 0.3, 1.0, mid0, pw0])
+    # the sigmoid's shape is not convex to fit: several starts, or one close law
+    starts = [np.array([np.log(secant_end), dw0, 0.3, 1.0, mid0, pw0])
+              for dw0 in (0.05, 0.3) for mid0 in (0.2, 0.45, 0.7, 0.9) for pw0 in (1.5, 4.0, 10.0)]
+    if initial is not None:
+        d0, dw, width, mid, power = initial.solimp
+        starts = [np.clip([np.log(initial.stiffness), dw, d0 / dw, width / top, mid, power],
+                          lower + 1e-9, upper - 1e-9)]
+    for x0 in starts:
         res = least_squares(lambda p: model(p, r) - f, x0, bounds=(lower, upper),
                             method="trf", max_nfev=2000, xtol=1e-12, ftol=1e-12)
         if best is None or res.cost < best.cost:
