@@ -126,3 +126,27 @@ def test_calibrate_bad_input_names_the_value(tmp_path, args, needle):
     res = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
     assert res.exit_code == 2 and needle in res.output
     assert not any(tmp_path.iterdir())
+
+
+def test_handshake_json_and_recording(tmp_path):
+    """handshake --json: per region peak/mean, the over-2-N set, speed; --record writes an .rrd."""
+    rrd = tmp_path / "hs.rrd"
+    res = run(["handshake", "--design", "pocket2-sil", "--skin", "Palm1=rigid", "--seed", "1",
+               "--record", str(rrd), "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert len(data["regions"]) == 18 and data["skins"]["Palm1"] == "rigid"
+    assert all({"peak_N", "mean_N"} <= set(v) for v in data["regions"].values())
+    assert set(data["over_2N"]) <= set(data["regions"])
+    assert data["steps_per_s"] > 0 and data["realtime_factor"] > 0
+    assert rrd.stat().st_size > 0
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["handshake", "--skin", "Palm1"], "is not REGION=DESIGN"),
+    (["handshake", "--skin", "Pinky9=rigid"], "region 'Pinky9' is unknown"),
+    (["handshake", "--design", "jelly"], "skin design 'jelly' is unknown"),
+])
+def test_handshake_bad_input_names_the_value(args, needle):
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and needle in res.output
