@@ -191,26 +191,25 @@ def add_skeleton(
             layout.palm_mass_kg / len(const.FINGERS),
         )
 
-    # Long fingers: same orientation as the hand frame, flexion about +y.
-    for f in const.FINGERS:
-        d = layout.digits[f]
-        body, pos = palm, d.base_m
-        for seg in ("proximal", "middle", "distal"):
-            body = body.add_body(name=f"{prefix}{f}_{seg}", pos=[float(v) for v in pos])
-            bodies[f"{f}_{seg}"] = body
-            (short,) = segment_joints(f, seg)
-            hinge(body, f, short, (0.0, 1.0, 0.0))
+    def chain(parent_body: mujoco.MjsBody, digit: str, pos, segments: tuple[str, ...]) -> None:
+        """Phalanges of one digit in a row, each flexing about +y, and a fingertip site."""
+        d = layout.digits[digit]
+        body = parent_body
+        for seg in segments:
+            body = body.add_body(name=f"{prefix}{digit}_{seg}", pos=[float(v) for v in pos])
+            bodies[f"{digit}_{seg}"] = body
+            (short,) = segment_joints(digit, seg)
+            hinge(body, digit, short, (0.0, 1.0, 0.0))
             length, radius = d.lengths_m[seg], d.radii_m[seg]
             end = length - (radius - skin) if seg == "distal" else length
-            bone(body, f"{f}_{seg}", (0, 0, 0), (end, 0, 0), radius - skin, d.masses_kg[seg])
+            bone(body, f"{digit}_{seg}", (0, 0, 0), (end, 0, 0), radius - skin, d.masses_kg[seg])
             pos = (length, 0.0, 0.0)
-        body.add_site(
-            name=f"{prefix}{f}_tip",
-            type=_SPHERE,
-            size=[0.002, 0, 0],
-            pos=[float(pos[0]), 0.0, 0.0],
-            group=4,
-        )
+        body.add_site(name=f"{prefix}{digit}_tip", type=_SPHERE, size=[0.002, 0, 0],
+                      pos=[float(pos[0]), 0.0, 0.0], group=4)
+
+    # Long fingers: same orientation as the hand frame, flexion about +y.
+    for f in const.FINGERS:
+        chain(palm, f, layout.digits[f].base_m, ("proximal", "middle", "distal"))
 
     # Thumb: metacarpal frame from the spread angle; thumb_rot about the hand's -x axis.
     d = layout.digits["thumb"]
@@ -232,21 +231,5 @@ def add_skeleton(
         d.radii_m["metacarpal"] - skin,
         d.masses_kg["metacarpal"],
     )
-    pos = (d.lengths_m["metacarpal"], 0.0, 0.0)
-    for seg in ("proximal", "distal"):
-        body = body.add_body(name=f"{prefix}thumb_{seg}", pos=[float(v) for v in pos])
-        bodies[f"thumb_{seg}"] = body
-        (short,) = segment_joints("thumb", seg)
-        hinge(body, "thumb", short, (0.0, 1.0, 0.0))
-        length, radius = d.lengths_m[seg], d.radii_m[seg]
-        end = length - (radius - skin) if seg == "distal" else length
-        bone(body, f"thumb_{seg}", (0, 0, 0), (end, 0, 0), radius - skin, d.masses_kg[seg])
-        pos = (length, 0.0, 0.0)
-    body.add_site(
-        name=f"{prefix}thumb_tip",
-        type=_SPHERE,
-        size=[0.002, 0, 0],
-        pos=[float(pos[0]), 0.0, 0.0],
-        group=4,
-    )
+    chain(body, "thumb", (d.lengths_m["metacarpal"], 0.0, 0.0), ("proximal", "distal"))
     return Skeleton(bodies=bodies, joints=joints)
