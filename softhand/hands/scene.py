@@ -2,7 +2,8 @@
 
 World frame: +Z up, gravity along -Z, no floor. The prosthetic hand (prefix ``pro_``) is fixed to
 the world through the body ``pro_wrist`` in a handshake pose: fingers along +X, thumb up (+Z), palm
-facing +Y. The partner hand (prefix ``hum_``) hangs from the mocap body ``hum_base`` and faces it:
+facing +Y. The partner hand (prefix ``hum_``) rides the free body ``hum_arm``, held by a soft weld
+(the arm's compliance) to the mocap target ``hum_base``, and faces it:
 fingers along -X, thumb up, palm facing -Y. The env drives ``hum_base``: from its start pose
 (where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
 
@@ -25,7 +26,17 @@ from softhand.hands.partner import add_partner_hand
 from softhand.hands.prosthetic import add_prosthetic_hand
 from softhand.hands.skeleton import new_spec, quat_from_axes
 
+#: Time constant of the weld holding the partner's hand to its target (s): with the hand's
+#: ~0.4 kg it gives an endpoint stiffness of a few hundred N/m, the order of the human arm's
+#: postural hand stiffness (Mussa-Ivaldi, Hogan & Bizzi 1985, J Neurosci 5(10):2732-2743).
+ARM_TIMECONST_S = 0.035
+#: Mass moving with the partner's wrist (kg): the distal forearm (assumption, ~1/4 of a 1.2 kg
+#: forearm, Winter 2009 Table 4.1: forearm 0.016 x body mass).
+ARM_MASS_KG = 0.3
+
 __all__ = [
+    "ARM_MASS_KG",
+    "ARM_TIMECONST_S",
     "PARTNER_QUAT",
     "PROSTHETIC_QUAT",
     "partner_contact_pose",
@@ -88,8 +99,18 @@ def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
     )
     add_prosthetic_hand(spec, wrist, config.prosthetic, "pro_")
     pos, quat = partner_start_pose(config)
-    base = spec.worldbody.add_body(
-        name="hum_base", mocap=True, pos=pos.tolist(), quat=quat.tolist()
-    )
-    add_partner_hand(spec, base, config.partner, "hum_")
+    spec.worldbody.add_body(name="hum_base", mocap=True, pos=pos.tolist(), quat=quat.tolist())
+    # The partner's arm: the hand rides a free body held to the mocap target by a soft weld, so
+    # the scripted reach and shake are compliant (an arm, not an infinitely strong fixture).
+    arm = spec.worldbody.add_body(name="hum_arm", pos=pos.tolist(), quat=quat.tolist())
+    arm.add_freejoint(name="hum_arm")
+    arm.add_geom(name="hum_arm_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                 mass=ARM_MASS_KG, contype=0, conaffinity=0, group=4)
+    add_partner_hand(spec, arm, config.partner, "hum_")
+    weld = spec.add_equality(name="hum_arm_weld", type=mujoco.mjtEq.mjEQ_WELD,
+                             objtype=mujoco.mjtObj.mjOBJ_BODY, name1="hum_arm", name2="hum_base")
+    weld.solref = [ARM_TIMECONST_S, 1.0]
+    for body in spec.bodies:
+        if body.name.startswith("hum_"):
+            body.gravcomp = 1.0  # the arm carries the hand's weight
     return spec
