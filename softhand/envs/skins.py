@@ -17,8 +17,9 @@ import mujoco
 import numpy as np
 
 from softhand.hands import partner_tissue_geoms, regions
+from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import HUMAN, PROSTHETIC
-from softhand.skin.calibrate import skin_names
+from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS, skin_names
 from softhand.skin.files import SHIPPED_DIR, load_calibration
 from softhand.skin.rig import apply_pair_law
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -30,12 +31,6 @@ DEFAULT_DESIGN = "pocket2-sil"  # the most lifelike design (calibration/skins/in
 SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
 
 
-def region_names() -> tuple[str, ...]:
-    from softhand.paper import paper
-
-    return tuple(paper()["handshake"]["regions"])
-
-
 def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None = None
                 ) -> dict[str, str]:
     """Region -> skin: ``design`` everywhere (default the most lifelike), then ``overrides``.
@@ -43,7 +38,7 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
     Raises:
         ValueError: an unknown region or skin, naming it and the allowed values.
     """
-    names = region_names()
+    names = paper_regions()
     design = design or DEFAULT_DESIGN
     if design not in SKIN_CHOICES:
         raise ValueError(f"skin design {design!r} is unknown; allowed: {', '.join(SKIN_CHOICES)}")
@@ -88,14 +83,8 @@ def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParam
     d_tissue = _invert(tissue, f)
     law, _ = fit_soft_contact(np.concatenate([[0.0], d_skin + d_tissue]),
                               np.concatenate([[0.0], f]), initial=tissue if skin == PROSTHETIC
-                              else own, reference_mass_kg=own_mass())
+                              else own, reference_mass_kg=CALIBRATION_MASS_KG * MASS_FACTORS[0])
     return law
-
-
-def own_mass() -> float:
-    from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS
-
-    return CALIBRATION_MASS_KG * MASS_FACTORS[0]
 
 
 def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:

@@ -56,6 +56,7 @@ __all__ = [
     "RegionInfo",
     "add_prosthetic_hand",
     "build_prosthetic_hand",
+    "paper_regions",
     "prosthetic_actuators",
     "regions",
 ]
@@ -104,7 +105,7 @@ class RegionInfo:
     sensor: str
 
 
-def _paper_regions() -> tuple[str, ...]:
+def paper_regions() -> tuple[str, ...]:
     names = tuple(paper()["handshake"]["regions"])
     if set(names) != set(REGION_SEGMENTS):
         raise RuntimeError(
@@ -246,7 +247,7 @@ def add_prosthetic_hand(
             **{k: driven for k in ("mcp", "thumb_mcp", "thumb_rot")},
         },
     )
-    regions_ = _paper_regions()
+    regions_ = paper_regions()
 
     # Skins, sites and touch sensors.
     palm_pads = _palm_pads(layout)
@@ -346,7 +347,7 @@ def regions(
         ValueError: if an element of a region is missing from ``model_or_spec``.
     """
     out: dict[str, RegionInfo] = {}
-    for region in _paper_regions():
+    for region in paper_regions():
         info = RegionInfo(
             region=region,
             body=f"{prefix}{REGION_SEGMENTS[region]}",

@@ -19,10 +19,10 @@ import numpy as np
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.skin.calibrate import (
     CALIBRATION_MASS_KG,
-    _hold_error,
-    _loading_error,
     fe_curves,
+    hold_error,
     law_curve,
+    loading_error,
 )
 from softhand.skin.files import FE_DIR, SHIPPED_DIR, load_calibration, shipped_skins
 from softhand.skin.rig import RigSettings, build_rig, run_rig
@@ -61,8 +61,8 @@ def run_calibration_benchmark(out_dir: str | Path = "reports", *, skins: list[st
             outs = [run_rig(model, curve.time_s, curve.displacement_mm, settings=settings)
                     for _ in range(REPEATS)]
             best = min(outs, key=lambda o: o.step_us)
-            rms, mx = _loading_error(best, curve)
-            row[rep] = {"rms_pct": rms, "max_pct": mx, "hold_pct": _hold_error(best, curve),
+            rms, mx = loading_error(best, curve)
+            row[rep] = {"rms_pct": rms, "max_pct": mx, "hold_pct": hold_error(best, curve),
                         "step_us": best.step_us, "nv": int(model.nv)}
         base = row.get("rigid", {}).get("step_us")
         for r in row.values():

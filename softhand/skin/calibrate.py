@@ -40,7 +40,8 @@ from softhand.skin.rig import RigSettings, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
 __all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
-           "calibrate_design", "calibrate_skin", "fe_curves", "law_curve", "skin_names"]
+           "calibrate_design", "calibrate_skin", "fe_curves", "hold_error", "law_curve",
+           "loading_error", "skin_names"]
 
 FORMAT_VERSION = 1
 CALIBRATION_MASS_KG = 0.2  # a hand segment; the mass tests use 0.01x (2 g) and 100x (20 kg)
@@ -135,7 +136,7 @@ def _ramp(curve: Curve) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return curve.time_s[:i + 1], curve.displacement_mm[:i + 1], curve.force_N[:i + 1]
 
 
-def _loading_error(out, curve: Curve) -> tuple[float, float]:
+def loading_error(out, curve: Curve) -> tuple[float, float]:
     """RMS and max error (% of 2 N) over the loading ramp, at the rig's actual indentation."""
     t_end = curve.time_s[curve.peak_index]
     ramp = out.time_s <= t_end + 1e-12
@@ -144,7 +145,7 @@ def _loading_error(out, curve: Curve) -> tuple[float, float]:
     return float(100 * np.sqrt(np.mean(err**2)) / 2.0), float(100 * np.abs(err).max() / 2.0)
 
 
-def _hold_error(out, curve: Curve) -> float | None:
+def hold_error(out, curve: Curve) -> float | None:
     if not curve.hold.any():
         return None
     t_end = curve.time_s[curve.peak_index]
@@ -263,8 +264,8 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         fit_s = time.perf_counter() - t0
         out = run_rig(build_rig(rep, settings=settings, **kw), main.time_s, main.displacement_mm,
                       settings=settings)
-        rms, mx = _loading_error(out, main)
-        relax = _hold_error(out, main)
+        rms, mx = loading_error(out, main)
+        relax = hold_error(out, main)
         sens = None if rep == "rigid" else _mass_sensitivity(rep, main, settings, **kw)
         results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.step_us, fit_s,
                                             extra)
