@@ -35,7 +35,7 @@ __all__ = [
     "interpolate_crossing",
 ]
 
-SOLVER_VERSION = "2"
+SOLVER_VERSION = "3"  # 3: default mesh with two elements through the roof (0.2)
 _DEPTH_MARKS_MM = (1.0, 2.0)
 
 
