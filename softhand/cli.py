@@ -273,8 +273,9 @@ def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
 @click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN",
               help="Skin of one region (repeatable), e.g. Palm1=rigid.")
-@click.option("--controller", type=click.Choice(["open-loop", "force"]), default="open-loop",
-              show_default=True, help="Controller of the prosthetic hand.")
+@click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
+              default="neutral", show_default=True,
+              help="Controller of the prosthetic hand (neutral: the paper's sensored hand).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the partner.")
 @click.option("--record", "record_path", type=click.Path(dir_okay=False), default=None,
               help="Write a rerun recording (.rrd) here.")

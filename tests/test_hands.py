@@ -161,7 +161,7 @@ def test_partner_tissues_listed(scene):
     spec, model = scene
     names = partner_tissue_geoms(model, "hum_")
     assert names == partner_tissue_geoms(spec, "hum_")
-    assert len(names) == 2 + 3 + 12 and "hum_tissue_palm" in names and "hum_tissue_back" in names
+    assert len(names) == 2 + 3 + 12 + 2 and "hum_tissue_palm" in names and "hum_tissue_back" in names
     with pytest.raises(ValueError, match="hum_tissue_palm"):
         partner_tissue_geoms(build_prosthetic_hand().compile(), "hum_")
 
@@ -184,10 +184,13 @@ def test_hand_length_and_width_match_paper(build, prefix):
     crease = data.site_xpos[model.site(f"{prefix}wrist_crease").id]
     tip = max(_support(model, data, g, x) for g in _body_geoms(model, f"{prefix}middle_distal"))
     length = tip - crease @ x
+    # breadth on the skin: bones plus the skin over them (the prosthetic has no skin region on
+    # the palm's borders, the partner a tissue geom there)
     palm_geoms = _body_geoms(model, f"{prefix}palm")
-    width = max(_support(model, data, g, y) for g in palm_geoms) + max(
-        _support(model, data, g, -y) for g in palm_geoms
-    )
+    skin = HandConfig().skin_thickness_m
+    def reach(g, u):  # noqa: E306
+        return _support(model, data, g, u) + (skin if "bone" in model.geom(g).name else 0.0)
+    width = max(reach(g, y) for g in palm_geoms) + max(reach(g, -y) for g in palm_geoms)
     assert length == pytest.approx(PAPER_LENGTH_M, rel=0.03)
     assert width == pytest.approx(PAPER_WIDTH_M, rel=0.03)
     # thumb tip ~56 mm proximal to the index tip ([Chatzioglou24]), hand extended
@@ -243,6 +246,30 @@ def test_full_command_closes_within_commercial_time():
         assert 0.5 * config.closing_time_s <= t <= 1.5 * config.closing_time_s, (name, t)
     # every joint, coupled ones included, ends flexed to >= 90 % of its upper limit
     assert np.all(data.qpos >= 0.90 * model.jnt_range[:, 1]), np.degrees(data.qpos)
+
+
+def test_contact_pose_puts_no_rigid_part_inside_the_other_hand():
+    """At partner_contact_pose() the hands touch (skins and tissues overlap) but no bone of one hand
+    is inside the other's soft envelope by more than 0.5 mm: the scripted target is reachable."""
+    spec = scene_spec()
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    pos, quat = partner_contact_pose(SceneConfig())
+    arm = model.jnt_qposadr[model.joint("hum_arm").id]
+    data.qpos[arm:arm + 7] = [*pos, *quat]
+    mujoco.mj_kinematics(model, data)
+    name = lambda g: model.geom(g).name  # noqa: E731
+    pro_soft = [model.geom(r.geom).id for r in regions(model).values()]
+    hum_soft = [model.geom(t).id for t in partner_tissue_geoms(model)]
+    pro_bone = [g for g in range(model.ngeom) if name(g).startswith("pro_bone")]
+    hum_bone = [g for g in range(model.ngeom) if name(g).startswith("hum_bone")]
+    ft = np.zeros(6)
+    dist = lambda a, b: mujoco.mj_geomDistance(model, data, a, b, 0.05, ft)  # noqa: E731
+    rigid = [(dist(a, b), name(a), name(b)) for a in pro_bone for b in hum_soft + hum_bone]
+    rigid += [(dist(a, b), name(a), name(b)) for a in hum_bone for b in pro_soft]
+    assert min(rigid)[0] > -0.5e-3, min(rigid)
+    soft = min(dist(a, b) for a in pro_soft for b in hum_soft)
+    assert soft < 0.0, soft  # the palms touch
 
 
 def test_touch_sensors_read_skin_pair_contacts():

@@ -8,6 +8,10 @@ thumb flexion, thumb rotation; positive closes):
   "close" signal).
 * :class:`ForceRegulating`: per digit, close until the mean force of that digit's regions reaches a
   target grip force, open a little when over it (a proportional force loop on the region forces).
+* :class:`Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
+  waiting for the partner"): per digit, close until the digit first touches the partner, then hold
+  that posture (the motors are not back-drivable) until the partner lets go. The default of
+  ``softhand handshake``, since it is the scenario of the paper's Fig. 4.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CONTROLLERS", "ForceRegulating", "OpenLoopClose", "make_controller"]
+__all__ = ["CONTROLLERS", "ForceRegulating", "Neutral", "OpenLoopClose", "make_controller"]
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 _GRIPPING = ("grip", "shake")
@@ -68,11 +72,40 @@ class ForceRegulating:
         return a
 
 
-CONTROLLERS = {"open-loop": OpenLoopClose, "force": ForceRegulating}
+@dataclass
+class Neutral:
+    """Close each digit at ``speed`` until its most loaded region exceeds ``touch_N``, then hold."""
+
+    speed: float = 0.5
+    touch_N: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not 0 < self.speed <= 1:
+            raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
+        if not self.touch_N > 0:
+            raise ValueError(f"touch_N = {self.touch_N!r} must be > 0")
+        self._held = np.zeros(5, bool)
+
+    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
+        a = np.zeros(6)
+        if info["phase"] not in _GRIPPING:
+            self._held[:] = False
+            a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
+            return a
+        forces = info["region_forces_N"]
+        for i, digit in enumerate(_DIGITS):
+            touching = max(v for k, v in forces.items() if k.startswith(digit)) > self.touch_N
+            self._held[i] |= touching
+            a[i] = 0.0 if self._held[i] else self.speed
+        a[5] = 1.0
+        return a
+
+
+CONTROLLERS = {"neutral": Neutral, "open-loop": OpenLoopClose, "force": ForceRegulating}
 
 
 def make_controller(name: str):
-    """``open-loop`` or ``force`` with default settings."""
+    """``neutral``, ``open-loop`` or ``force`` with default settings."""
     if name not in CONTROLLERS:
         raise ValueError(f"controller {name!r} is unknown; allowed: {', '.join(CONTROLLERS)}")
     return CONTROLLERS[name]()

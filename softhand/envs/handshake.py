@@ -138,6 +138,8 @@ class HandshakeEnv(gym.Env):
         self._grip_act = np.array(hum[:5])
         self._opp_act = hum[5]
         self._mocap = m.body("hum_base").mocapid[0]
+        self._feel_adr = np.array([m.sensor_adr[i] for i in range(m.nsensor)
+                                   if m.sensor(i).name.startswith("hum_feel_")])
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
@@ -179,8 +181,9 @@ class HandshakeEnv(gym.Env):
         for _ in range(self.frame_skip):
             t = d.time
             d.mocap_pos[self._mocap] = script.mount(t)
-            touched = self._forces > CONTACT_N
-            mean = float(self._forces[touched].mean()) if touched.any() else 0.0
+            feel = d.sensordata[self._feel_adr]
+            touched = feel > CONTACT_N
+            mean = float(feel[touched].mean()) if touched.any() else 0.0
             d.ctrl[self._grip_act] = script.grip(t, mean, dt)
             phase = script.timeline.phase(t)
             d.ctrl[self._opp_act] = m.actuator_ctrlrange[self._opp_act, 1] * (

@@ -5,6 +5,11 @@ is the series combination of the region's skin and the partner's human tissue (b
 indentation of the pair is the sum of the two at the same force), fitted as one calibrated soft
 contact and scaled by the pair's inverse inertia (:mod:`softhand.skin.soft_contact`). A ``rigid``
 region leaves only the tissue's compliance. Laws come from the shipped calibration files; no FE run.
+
+Where the prosthetic hand has no skin region but meets the partner in a handshake, its rigid shell
+(the bone geom) meets every tissue geom through a pair with the ``rigid`` law (:data:`SHELL_BONES`:
+the thenar under the thumb's metacarpal and the radial and ulnar borders of the palm). Without
+them the partner's tissue would pass through the shell until bone met bone.
 """
 
 from __future__ import annotations
@@ -24,9 +29,11 @@ from softhand.skin.files import SHIPPED_DIR, load_calibration
 from softhand.skin.rig import apply_pair_law
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
-__all__ = ["DEFAULT_DESIGN", "SKIN_CHOICES", "add_skin_pairs", "apply_skins", "parse_skins",
+__all__ = ["DEFAULT_DESIGN", "SHELL_BONES", "SKIN_CHOICES", "add_skin_pairs", "apply_skins", "parse_skins",
            "series_law"]
 
+#: Prosthetic bones without a skin region whose shell meets the partner's tissue in a handshake.
+SHELL_BONES = ("thumb_metacarpal", "index_metacarpal", "little_metacarpal")
 DEFAULT_DESIGN = "pocket2-sil"  # the most lifelike design (calibration/skins/index.json ranking)
 SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
 
@@ -54,13 +61,19 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
 
 
 def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_") -> list[str]:
-    """Add one pair per (prosthetic skin region, partner tissue geom); return their names."""
+    """Add one pair per (prosthetic skin region, partner tissue geom) and per (shell bone, tissue
+    geom); return their names (``{Region}__{tissue}``, ``shell_{bone}__{tissue}``)."""
     tissues = partner_tissue_geoms(spec, hum)
+    geoms = {info.region: info.geom for info in regions(spec, pro).values()}
+    for bone in SHELL_BONES:
+        geoms[f"shell_{bone}"] = f"{pro}bone_{bone}"
+        if spec.geom(geoms[f"shell_{bone}"]) is None:
+            raise ValueError(f"prosthetic bone geom {geoms[f'shell_{bone}']!r} not found")
     names = []
-    for info in regions(spec, pro).values():
+    for key, geom in geoms.items():
         for tissue in tissues:
-            name = f"{info.region}__{tissue}"
-            spec.add_pair(name=name, geomname1=info.geom, geomname2=tissue, condim=3,
+            name = f"{key}__{tissue}"
+            spec.add_pair(name=name, geomname1=geom, geomname2=tissue, condim=3,
                           friction=[1.0, 1.0, 0.005, 0.0001, 0.0001])
             names.append(name)
     return names
@@ -96,9 +109,12 @@ def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:
 
 def apply_skins(model: mujoco.MjModel, skins: Mapping[str, str], *,
                 directory: str | Path = SHIPPED_DIR, pro: str = "pro_") -> None:
-    """Write each region's pair law into the compiled model (pairs from :func:`add_skin_pairs`)."""
+    """Write each region's pair law into the compiled model (pairs from :func:`add_skin_pairs`);
+    shell pairs get the ``rigid`` law."""
     for pid in range(model.npair):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
         region, _, _ = name.partition("__")
         if region in skins:
             apply_pair_law(model, pid, series_law(skins[region], str(directory)))
+        elif region.startswith("shell_"):
+            apply_pair_law(model, pid, series_law("rigid", str(directory)))

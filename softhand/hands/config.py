@@ -41,14 +41,17 @@ class HandConfig:
         palm_thickness_m: dorsal to palmar skin at the metacarpals (m). None: 0.16 x hand length
             (constants.PALM_THICKNESS_RATIO, an assumption).
         skin_thickness_m: soft layer over the rigid bone (m): bones are this much smaller than the
-            segment envelope, so skins and tissues touch first.
+            segment envelope, so skins and tissues touch first. Default 6 mm: deeper than the skin
+            and the human tissue each indent at a handshake's forces (pocket2-sil 2.7 mm and the
+            human finger 3.7 mm at 2 N, so bones meet only past about 12 mm together); the
+            paper's phalanx skins are 9 mm of elastomer on a rigid base (assumption for the hand).
         density_kg_m3: tissue density for segment masses = density x envelope volume (kg/m^3).
     """
 
     hand_length_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_length_mm"))
     hand_width_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_width_mm"))
     palm_thickness_m: float | None = None
-    skin_thickness_m: float = 0.004
+    skin_thickness_m: float = 0.006
     density_kg_m3: float = const.DENSITY_KG_M3
 
     def __post_init__(self) -> None:
@@ -158,8 +161,20 @@ class SceneConfig:
         timestep_s: simulation time step (s).
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
         prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
-        partner_start_offset_m: partner mount start position relative to its contact pose (m, world
-            frame); the env moves the mocap from there to the contact pose (reach) and back.
+        crossing_angle_deg: angle between the two hands' long axes in the plane of the touching
+            palms, from antiparallel (0) to crossed at right angles (90), in degrees. In a handshake
+            each hand tilts ulnarly, its fingers pointing forward and down, so that each hand's
+            fingers wrap around the other's ulnar border onto its back. Default 60 (about 30 deg of
+            tilt per hand): an assumption, no published measurement found.
+        partner_contact_offset_m: shift of the partner from the web-to-web pose in its hand
+            frame (m): default 15 mm ulnar and 7 mm off the palm, the smallest shift (searched on a
+            5 mm x 5 mm x 1 mm grid) at which no rigid part (bone or bare shell) of one hand lies
+            more than 0.5 mm inside the other's soft envelope while the soft parts still touch (the
+            two thenars would otherwise sit on each other; tests/test_hands.py checks it).
+        partner_start_offset_m: partner mount start position relative to its contact pose (m, in
+            the partner's hand frame: +x distal, +y radial, +z dorsal); the env moves the mocap
+            from there to the contact pose (reach) and back. Default: 150 mm back along the
+            forearm and 100 mm off the palm.
     """
 
     prosthetic: ProstheticConfig = field(default_factory=ProstheticConfig)
@@ -167,12 +182,15 @@ class SceneConfig:
     timestep_s: float = 0.001
     gravity_m_s2: float = 9.81
     prosthetic_wrist_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    partner_start_offset_m: tuple[float, float, float] = (0.15, 0.10, 0.0)
+    crossing_angle_deg: float = 60.0
+    partner_contact_offset_m: tuple[float, float, float] = (0.0, -0.015, 0.007)
+    partner_start_offset_m: tuple[float, float, float] = (-0.15, 0.0, 0.10)
 
     def __post_init__(self) -> None:
         _check("timestep_s", self.timestep_s, 0.0, 0.01, "s")
         _check("gravity_m_s2", self.gravity_m_s2, -1e-12, 100.0, "m/s^2")
-        for name in ("prosthetic_wrist_pos_m", "partner_start_offset_m"):
+        _check("crossing_angle_deg", self.crossing_angle_deg, -1e-12, 90.0 + 1e-12, "deg")
+        for name in ("prosthetic_wrist_pos_m", "partner_contact_offset_m", "partner_start_offset_m"):
             value = getattr(self, name)
             if len(value) != 3:
                 raise ValueError(f"{name} = {value!r}: expected 3 coordinates in m")

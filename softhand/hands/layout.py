@@ -11,7 +11,7 @@ How the published numbers fix the layout (L = hand length, W = hand width, t = p
 - fingertips: the middle tip at x = L (definition of hand length), the others
   FINGERTIP_OFFSET_M proximal to it ([Chatzioglou24]); so MCP_x = tip_x - (PP + MP + DP);
 - CMC joints: MCP_x - metacarpal length ([Buchholz92]);
-- across the palm: the index and little metacarpal bones' outer surfaces lie at +-W/2, so that the
+- across the palm: the skin over the index and little metacarpals lies at +-W/2, so that the
   breadth across the MCPs is W (paper Table 1); the MCP centres in between are spaced in
   proportion to the finger breadth shares (assumption, constants.FINGER_BREADTH_SHARE);
 - thumb: CMC at constants.THUMB_CMC_FRACTION (assumption); its spread angle in the palm plane is
@@ -117,9 +117,10 @@ def hand_layout(config: HandConfig) -> HandLayout:
     scale = L / const.FINGERTIP_OFFSET_REFERENCE_LENGTH_M
     r_mc = 0.5 * t - skin  # finger metacarpal bone radius: palm core between the two skins
 
-    # Across the palm: the index and little metacarpal bones' outer surfaces at +-W/2; the MCP
-    # centres in between are spaced by the mean breadth share of each pair of neighbours.
-    span = W - 2.0 * r_mc  # distance between the index and little MCP centres
+    # Across the palm: the skin over the index and little metacarpals at +-W/2 (hand breadth is
+    # measured on the skin); the MCP centres in between are spaced by the mean breadth share of
+    # each pair of neighbours.
+    span = W - 2.0 * (r_mc + skin)  # distance between the index and little MCP centres
     shares = const.FINGER_BREADTH_SHARE
     total = sum(shares.values())
     gaps = [

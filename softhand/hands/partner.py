@@ -23,9 +23,12 @@ fingers acting at the proximal phalanx ([Mathiowetz85]); the grip force in a han
 far the scripted target lies beyond contact (kp x overshoot).
 
 Contact geoms: ``tissue_{segment}`` (contype = conaffinity = 0: contacts only through explicit
-``<pair>`` elements): capsules around the thumb metacarpal (thenar) and every phalanx, and two
-ellipsoids on the palm body: ``tissue_palm`` (palmar) and ``tissue_back`` (dorsal).
-List them with partner_tissue_geoms(). Rigid bones (``bone_*``) collide with the prosthetic bones.
+``<pair>`` elements): capsules around the thumb metacarpal (thenar) and every phalanx, two
+ellipsoids on the palm body: ``tissue_palm`` (palmar) and ``tissue_back`` (dorsal), and capsules
+around the index and little metacarpals (the palm's radial and ulnar borders).
+List them with partner_tissue_geoms(). Each has a touch sensor ``feel_{segment}`` on a site
+enclosing it: the force the partner feels there, whatever touches it (skin, shell or bone).
+Rigid bones (``bone_*``) collide with the prosthetic bones.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ _ELLIPSOID = mujoco.mjtGeom.mjGEOM_ELLIPSOID
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 _BONE_RGBA = (0.55, 0.42, 0.38, 1.0)
 _TISSUE_RGBA = (0.87, 0.68, 0.58, 0.5)
+_SITE_MARGIN_M = 0.0015  # touch zones reach this far beyond the tissue surface
 
 #: Segments carrying a tissue geom, in the order partner_tissue_geoms() returns them.
 TISSUE_SEGMENTS: tuple[str, ...] = (
@@ -61,6 +65,8 @@ TISSUE_SEGMENTS: tuple[str, ...] = (
     "thumb_proximal",
     "thumb_distal",
     *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
+    "index_metacarpal",
+    "little_metacarpal",
 )
 
 _DIGIT_JOINTS = {"thumb": ("cmc", "mcp", "ip"), **{f: ("mcp", "pip", "dip") for f in const.FINGERS}}
@@ -169,7 +175,7 @@ def add_partner_hand(
         )
 
     # Tissues.
-    def tissue(body: mujoco.MjsBody, name: str, **kw) -> None:
+    def tissue(body: mujoco.MjsBody, name: str, *, size: list[float], **kw) -> None:
         body.add_geom(
             name=f"{prefix}tissue_{name}",
             contype=0,
@@ -177,8 +183,14 @@ def add_partner_hand(
             mass=0.0,
             group=2,
             rgba=list(_TISSUE_RGBA),
+            size=size,
             **kw,
         )
+        # what the partner feels: a touch sensor on a zone enclosing the tissue
+        zone = [v + _SITE_MARGIN_M if v > 0 else 0.0 for v in size]
+        body.add_site(name=f"{prefix}feel_{name}", size=zone, group=4, **kw)
+        spec.add_sensor(name=f"{prefix}feel_{name}", type=mujoco.mjtSensor.mjSENS_TOUCH,
+                        objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{prefix}feel_{name}")
 
     xm, half_w, az = layout.palm_length_m, 0.5 * layout.width_m, 0.35 * t
     for name, sign in (("palm", -1.0), ("back", 1.0)):
@@ -193,6 +205,10 @@ def add_partner_hand(
         digit, part = seg.split("_")
         d = layout.digits[digit]
         length, radius = d.lengths_m[part], d.radii_m[part]
+        if part == "metacarpal" and digit != "thumb":
+            # the radial and ulnar borders of the palm, outside the palm/back ellipsoids
+            tissue(palm, seg, type=_CAPSULE, size=[radius, 0, 0], fromto=[*d.cmc_m, *d.base_m])
+            continue
         end = length - radius if part == "distal" else length
         tissue(
             skel.bodies[seg], seg, type=_CAPSULE, size=[radius, 0, 0], fromto=[0, 0, 0, end, 0, 0]

@@ -3,16 +3,17 @@
 World frame: +Z up, gravity along -Z, no floor. The prosthetic hand (prefix ``pro_``) is fixed to
 the world through the body ``pro_wrist`` in a handshake pose: fingers along +X, thumb up (+Z), palm
 facing +Y. The partner hand (prefix ``hum_``) rides the free body ``hum_arm``, held by a soft weld
-(the arm's compliance) to the mocap target ``hum_base``, and faces it:
-fingers along -X, thumb up, palm facing -Y. The env drives ``hum_base``: from its start pose
-(where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
+(the arm's compliance) to the mocap target ``hum_base``, and faces it: palm facing -Y, its long axis
+turned by SceneConfig.crossing_angle_deg from antiparallel (fingers along -X) so that its fingers
+point down across the prosthetic palm (partner_quat()). The env drives ``hum_base``: from its start
+pose (where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
 
-Contact pose: the palmar surfaces touch (along Y) and the hands overlap along X so that each hand's
-wrist crease lies at the other hand's PIP line (middle finger): each hand's proximal phalanges lie
-across the other's palm heel, around which its fingers wrap onto the back of the other hand when
-they flex, as in a full-enclosure handshake (paper: forces > 2 N on palm, back of palm, thumb and
-the proximal/middle phalanges). An approximation of an antiparallel handshake; real hands cross at
-an angle.
+Contact pose: the palmar surfaces touch (along Y) and the two hands' web spaces (between thumb and
+index) meet, so that each hand's proximal phalanges lie across the other's palm and, with the
+crossing angle, its fingers wrap around the other's ulnar border onto the back of the hand when they
+flex, as in a full-enclosure handshake (paper: forces > 2 N on palm, back of palm, thumb and the
+proximal/middle phalanges). Both thumbs stay on the palmar side here; in real handshakes they cross
+over each other's index metacarpal, which this rigid-bone model only approximates.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import mujoco
 import numpy as np
 
 from softhand.hands.config import SceneConfig
-from softhand.hands.layout import hand_layout
+from softhand.hands.layout import HandLayout, hand_layout
 from softhand.hands.partner import add_partner_hand
 from softhand.hands.prosthetic import add_prosthetic_hand
 from softhand.hands.skeleton import new_spec, quat_from_axes
@@ -37,43 +38,64 @@ ARM_MASS_KG = 0.3
 __all__ = [
     "ARM_MASS_KG",
     "ARM_TIMECONST_S",
-    "PARTNER_QUAT",
     "PROSTHETIC_QUAT",
     "partner_contact_pose",
+    "partner_quat",
     "partner_start_pose",
     "scene_spec",
+    "web_point",
 ]
 
 #: Hand frame -> world: prosthetic x -> +X, y (radial) -> +Z, z (dorsal) -> -Y.
 PROSTHETIC_QUAT: tuple[float, ...] = tuple(
     quat_from_axes(np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, -1.0, 0]))
 )
-#: Hand frame -> world: partner x -> -X, y (radial) -> +Z, z (dorsal) -> +Y.
-PARTNER_QUAT: tuple[float, ...] = tuple(
-    quat_from_axes(np.array([-1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, 1.0, 0]))
-)
+
+
+def partner_quat(crossing_angle_deg: float) -> np.ndarray:
+    """Partner hand frame -> world: palm facing -Y, fingers turned down by the crossing angle.
+
+    At 0 the fingers point along -X and the thumb up (+Z); at angle b the fingers point along
+    (-cos b, 0, -sin b) and the radial side along (-sin b, 0, cos b); the back faces +Y.
+    """
+    b = np.radians(crossing_angle_deg)
+    return np.array(quat_from_axes(np.array([-np.cos(b), 0.0, -np.sin(b)]),
+                          np.array([-np.sin(b), 0.0, np.cos(b)]), np.array([0.0, 1.0, 0.0])))
+
+
+def web_point(layout: HandLayout) -> np.ndarray:
+    """The web space between thumb and index in the hand frame (mid-thickness of the palm): the
+    radial border of the index metacarpal, half-way between the thumb's CMC and the index MCP."""
+    thumb, index = layout.digits["thumb"], layout.digits["index"]
+    return np.array([0.5 * (thumb.cmc_m[0] + index.base_m[0]),
+                     index.base_m[1] + index.radii_m["metacarpal"], 0.0])
 
 
 def partner_contact_pose(config: SceneConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """World position (m) and quaternion of ``hum_base`` when the two hands are in full contact."""
+    """World position (m) and quaternion of ``hum_base`` when the two hands are in full contact:
+    web spaces together, palmar surfaces touching, then SceneConfig.partner_contact_offset_m."""
     config = config or SceneConfig()
     pro = hand_layout(config.prosthetic.hand)
     hum = hand_layout(config.partner.hand)
-    offset = np.array(
-        [
-            0.5 * (pro.pip_x_m() + hum.pip_x_m()),  # each wrist crease at the other's PIP line
-            0.5 * (pro.thickness_m + hum.thickness_m),  # palmar surfaces touch along Y
-            0.0,
-        ]
-    )
-    return np.asarray(config.prosthetic_wrist_pos_m, float) + offset, np.array(PARTNER_QUAT)
+    quat = partner_quat(config.crossing_angle_deg)
+    r_pro, r_hum = _rotation(np.array(PROSTHETIC_QUAT)), _rotation(quat)
+    wrist = np.asarray(config.prosthetic_wrist_pos_m, float)
+    pos = wrist + r_pro @ web_point(pro) - r_hum @ web_point(hum)
+    pos[1] = wrist[1] + 0.5 * (pro.thickness_m + hum.thickness_m)  # palmar surfaces touch along Y
+    return pos + r_hum @ np.asarray(config.partner_contact_offset_m, float), quat
 
 
 def partner_start_pose(config: SceneConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
     """World position (m) and quaternion of ``hum_base`` at the start of a handshake."""
     config = config or SceneConfig()
     pos, quat = partner_contact_pose(config)
-    return pos + np.asarray(config.partner_start_offset_m, float), quat
+    return pos + _rotation(quat) @ np.asarray(config.partner_start_offset_m, float), quat
+
+
+def _rotation(quat: np.ndarray) -> np.ndarray:
+    mat = np.zeros(9)
+    mujoco.mju_quat2Mat(mat, np.asarray(quat, float))
+    return mat.reshape(3, 3)
 
 
 def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
@@ -110,6 +132,9 @@ def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
     weld = spec.add_equality(name="hum_arm_weld", type=mujoco.mjtEq.mjEQ_WELD,
                              objtype=mujoco.mjtObj.mjOBJ_BODY, name1="hum_arm", name2="hum_base")
     weld.solref = [ARM_TIMECONST_S, 1.0]
+    # anchor at the arm body's origin: the shared numeric default of equalities puts a weld's
+    # anchor 1 m along body2's y, where a small wrist rotation satisfies it with the hand far away
+    weld.data[0:3] = 0.0
     for body in spec.bodies:
         if body.name.startswith("hum_"):
             body.gravcomp = 1.0  # the arm carries the hand's weight
