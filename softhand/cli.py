@@ -292,25 +292,25 @@ def handshake(design, skin_items, controller, seed, record_path, as_json) -> Non
     except ValueError as exc:
         _fail(exc)
     if record_path:
-        from softhand.viz import HandshakeFrames, record_handshake
+        from softhand.viz import record_handshake
+        from softhand.viz.bench import frames_of
 
-        frames = HandshakeFrames(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat,
-                                 run.region_force_N, run.region_names, run.skins, run.contacts,
-                                 run.phase)
-        record_handshake(record_path, run.model, frames)
+        record_handshake(record_path, run.model, frames_of(run))
     summary = run.summary()
     if as_json:
         click.echo(json.dumps(summary, indent=1))
         return
-    click.echo("| region | skin | peak N | mean N | > 2 N |\n|---|---|---|---|---|")
+    click.echo("| region | skin | peak N | mean N | peak area mm^2 | > 2 N |\n"
+               "|---|---|---|---|---|---|")
     for region, v in summary["regions"].items():
         mark = "yes" if v["peak_N"] > OVER_N else ""
         click.echo(f"| {region} | {run.skins[region]} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
-                   f"{mark} |")
+                   f"{v['peak_area_mm2']:.0f} | {mark} |")
     cmp = summary["paper_over_2N"]
     click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
     click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "
                f"only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
+    click.echo(f"bone on bone (no skin between): peak {summary['rigid_contact_peak_N']:.1f} N")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record_path}" if record_path else ""))
 
@@ -330,6 +330,16 @@ def bench_fe(out_dir, quick) -> None:
 
     report = run_fe_benchmark(out_dir, quick=quick)
     click.echo(report)
+
+
+@bench.command("handshake")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              default="reports", show_default=True, help="Folder for bench-handshake.md/json.")
+def bench_handshake(out_dir) -> None:
+    """Handshake speed (recording off/on, 0.5-2 ms) and the skins side by side."""
+    from softhand.viz.bench import run_handshake_benchmark
+
+    click.echo(run_handshake_benchmark(out_dir))
 
 
 @bench.command("calibration")

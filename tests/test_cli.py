@@ -136,7 +136,9 @@ def test_handshake_json_and_recording(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     assert len(data["regions"]) == 18 and data["skins"]["Palm1"] == "rigid"
-    assert all({"peak_N", "mean_N"} <= set(v) for v in data["regions"].values())
+    assert all({"peak_N", "mean_N", "peak_area_mm2", "mean_area_mm2"} <= set(v)
+               for v in data["regions"].values())
+    assert data["rigid_contact_peak_N"] >= 0.0
     assert set(data["over_2N"]) <= set(data["regions"])
     assert data["steps_per_s"] > 0 and data["realtime_factor"] > 0
     assert rrd.stat().st_size > 0

@@ -1,6 +1,8 @@
-"""The handshake environment: Gymnasium contract, determinism, bad input (issue 4, in progress)."""
+"""The handshake environment: Gymnasium contract, determinism, hard cases, bad input."""
 
 from __future__ import annotations
+
+import shutil
 
 import gymnasium as gym
 import numpy as np
@@ -9,7 +11,9 @@ from gymnasium.utils.env_checker import check_env
 
 import softhand.envs  # noqa: F401  (registers softhand/Handshake-v0)
 from softhand.envs import HandshakeEnv
-from softhand.envs.skins import parse_skins
+from softhand.envs.controllers import make_controller
+from softhand.envs.skins import SKIN_CHOICES, parse_skins
+from softhand.skin.files import SHIPPED_DIR
 
 
 def _rollout(env: HandshakeEnv, seed: int) -> tuple[np.ndarray, float]:
@@ -52,3 +56,58 @@ def test_bad_input_names_the_value():
         env.step(np.array([2.0, 0, 0, 0, 0, 0]))
     with pytest.raises(ValueError, match="outside the action space"):
         env.step(np.array([np.nan, 0, 0, 0, 0, 0]))
+
+
+def _episode(env: HandshakeEnv, policy, seed: int = 0) -> dict:
+    """Run one episode; return the largest region force, joint speed and arm offset seen."""
+    obs, info = env.reset(seed=seed)
+    m, d = env.model, env.data
+    arm = m.body("hum_arm").id
+    worst = {"force_N": 0.0, "qvel": 0.0, "arm_offset_m": 0.0}
+    while True:
+        obs, _, term, trunc, info = env.step(policy(obs, info))
+        assert np.all(np.isfinite(obs)) and not term, f"unstable at t = {d.time:.3f} s"
+        worst["force_N"] = max(worst["force_N"], max(info["region_forces_N"].values()))
+        worst["qvel"] = max(worst["qvel"], float(np.abs(d.qvel).max()))
+        worst["arm_offset_m"] = max(worst["arm_offset_m"],
+                                    float(np.linalg.norm(d.mocap_pos[0] - d.xpos[arm])))
+        if trunc:
+            return worst
+
+
+def _bounded(worst: dict) -> None:
+    # a handshake's region forces stay far below a hand's 400 N grip; joints below 100 rad/s;
+    # the partner's arm never more than 5 cm from its target (nothing flies away)
+    assert worst["force_N"] < 60.0, worst
+    assert worst["qvel"] < 100.0, worst
+    assert worst["arm_offset_m"] < 0.05, worst
+
+
+@pytest.mark.parametrize("skin", SKIN_CHOICES)
+def test_every_skin_design_runs_a_full_episode_finite_and_bounded(skin):
+    _bounded(_episode(HandshakeEnv(design=skin), make_controller("neutral")))
+
+
+def test_hard_case_partner_squeezes_five_times_harder():
+    normal = _episode(HandshakeEnv(), make_controller("neutral"))
+    hard = _episode(HandshakeEnv(squeeze=5.0), make_controller("neutral"))
+    _bounded(hard)
+    assert hard["force_N"] > normal["force_N"]  # the squeeze reaches the skins
+
+
+def test_hard_case_controller_slams_the_fingers_closed_at_full_speed():
+    _bounded(_episode(HandshakeEnv(), lambda obs, info: np.ones(6)))
+
+
+@pytest.mark.parametrize("timestep_s", [0.0005, 0.001, 0.002])
+def test_hard_case_timesteps_half_to_two_milliseconds(timestep_s):
+    env = HandshakeEnv(timestep_s=timestep_s, frame_skip=round(0.01 / timestep_s))
+    _bounded(_episode(env, make_controller("open-loop")))
+
+
+def test_corrupt_calibration_file_names_the_file(tmp_path):
+    for f in SHIPPED_DIR.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    (tmp_path / "pocket2-sil.json").write_text("{ not json")
+    with pytest.raises(ValueError, match="pocket2-sil"):
+        HandshakeEnv(design="pocket2-sil", calibration_dir=tmp_path)

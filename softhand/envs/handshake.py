@@ -127,6 +127,7 @@ class HandshakeEnv(gym.Env):
         m = self.model
         self.region_names = tuple(self.skins)
         infos = regions(m, "pro_")
+        self.region_geoms = tuple(infos[r].geom for r in self.region_names)
         self._sensor_adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id]
                                      for r in self.region_names])
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
@@ -162,6 +163,10 @@ class HandshakeEnv(gym.Env):
         hi = m.actuator_ctrlrange[self._grip_act, 1]
         self._script = PartnerScript(self._timeline.scaled(factor), start, contact,
                                      grip_force_N=grip, shake_phase=phase, flex_range=(lo, hi))
+        # the mount's path at every physics step (a scripted arm: no feedback from the contacts)
+        n_steps = int(np.ceil(self._script.timeline.total_s / m.opt.timestep)) + self.frame_skip
+        self._mount = np.array([self._script.mount(k * m.opt.timestep) for k in range(n_steps)])
+        self._step_index = 0
         d.mocap_pos[self._mocap] = start
         d.mocap_quat[self._mocap] = quat
         mujoco.mj_forward(m, d)
@@ -177,19 +182,20 @@ class HandshakeEnv(gym.Env):
             raise RuntimeError("call reset() before step()")
         m, d, script = self.model, self.data, self._script
         d.ctrl[self._pro_act] = a * self._max_speed
-        dt = m.opt.timestep
-        for _ in range(self.frame_skip):
-            t = d.time
-            d.mocap_pos[self._mocap] = script.mount(t)
-            feel = d.sensordata[self._feel_adr]
-            touched = feel > CONTACT_N
-            mean = float(feel[touched].mean()) if touched.any() else 0.0
-            d.ctrl[self._grip_act] = script.grip(t, mean, dt)
-            phase = script.timeline.phase(t)
-            d.ctrl[self._opp_act] = m.actuator_ctrlrange[self._opp_act, 1] * (
-                phase in ("grip", "shake"))
+        # the partner's grip acts once per action step (100 Hz by default), the arm every step
+        t = d.time
+        feel = d.sensordata[self._feel_adr]
+        touched = feel > CONTACT_N
+        mean = float(feel[touched].mean()) if touched.any() else 0.0
+        d.ctrl[self._grip_act] = script.grip(t, mean, m.opt.timestep * self.frame_skip)
+        d.ctrl[self._opp_act] = m.actuator_ctrlrange[self._opp_act, 1] * (
+            script.timeline.phase(t) in ("grip", "shake"))
+        mount, k, last = self._mount, self._step_index, len(self._mount) - 1
+        for i in range(k, k + self.frame_skip):
+            d.mocap_pos[self._mocap] = mount[min(i, last)]
             mujoco.mj_step(m, d)
-            self._forces = d.sensordata[self._sensor_adr].copy()
+        self._step_index = k + self.frame_skip
+        self._forces = d.sensordata[self._sensor_adr].copy()
         phase = script.timeline.phase(d.time)
         unstable = not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)))
         terms = self._reward_terms(a, phase)

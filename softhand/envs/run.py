@@ -13,7 +13,7 @@ from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
 from softhand.paper import paper
 
-__all__ = ["HandshakeRun", "run_handshake"]
+__all__ = ["ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
 
 OVER_N = 2.0  # the paper's Fig. 4 threshold
 
@@ -34,10 +34,15 @@ class HandshakeRun:
     wall_s: float
     steps: int
     model: mujoco.MjModel = field(repr=False)
+    region_area_mm2: np.ndarray | None = None
+    rigid_force_N: np.ndarray | None = None
 
     def table(self) -> dict[str, dict[str, float]]:
+        """Per region: peak and mean force (N) and contact area (mm^2) over the handshake."""
         f = self.region_force_N
-        return {r: {"peak_N": float(f[:, i].max()), "mean_N": float(f[:, i].mean())}
+        a = self.region_area_mm2 if self.region_area_mm2 is not None else np.zeros_like(f)
+        return {r: {"peak_N": float(f[:, i].max()), "mean_N": float(f[:, i].mean()),
+                    "peak_area_mm2": float(a[:, i].max()), "mean_area_mm2": float(a[:, i].mean())}
                 for i, r in enumerate(self.region_names)}
 
     @property
@@ -52,9 +57,63 @@ class HandshakeRun:
 
     def summary(self) -> dict:
         sim = float(self.time_s[-1])
+        rigid = self.rigid_force_N if self.rigid_force_N is not None else np.zeros(1)
         return {"regions": self.table(), "over_2N": self.over_2n,
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
+                "rigid_contact_peak_N": float(rigid.max()),
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
+
+
+def mean_curvature_radius(model: mujoco.MjModel, geom: int) -> float:
+    """1 / mean curvature (m) of a geom's flattest point: the harmonic mean of its principal radii
+    (sphere r; capsule 2r; ellipsoid with semi-axes a1 >= a2 >= a3 at the a3 pole:
+    2 / (a3/a1^2 + a3/a2^2)); other types: their largest size."""
+    size, kind = model.geom_size[geom], model.geom_type[geom]
+    if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+        return float(size[0])
+    if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        return 2.0 * float(size[0])
+    if kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+        a1, a2, a3 = sorted(size, reverse=True)
+        return float(2.0 / (a3 / a1**2 + a3 / a2**2))
+    return float(max(size))
+
+
+class ContactAreas:
+    """Per-region contact area and the force carried by bone on bone, from MuJoCo's contacts.
+
+    Area estimate: each contact of a region's skin geom adds the area of the circle where the two
+    undeformed surfaces, taken as spheres of each geom's mean curvature radius, intersect at the
+    contact's penetration depth delta: 2 pi R delta, R = R1 R2 / (R1 + R2). Softer skins sink
+    deeper at the same force, so their areas grow (the paper's argument for compliant skins); the
+    deformed patch of a real skin is larger still (an estimate, not an FE result).
+    """
+
+    def __init__(self, model: mujoco.MjModel, region_geoms: list[int]) -> None:
+        self.region_of = -np.ones(model.ngeom, dtype=int)
+        self.region_of[np.asarray(region_geoms)] = np.arange(len(region_geoms))
+        self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
+        self.bone = np.array(["bone_" in (model.geom(g).name or "") for g in range(model.ngeom)])
+        self.model = model
+        self._force = np.zeros(6)
+
+    def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float]:
+        area = np.zeros(int(self.region_of.max()) + 1)
+        rigid = 0.0
+        for i in range(data.ncon):
+            c = data.contact[i]
+            g1, g2 = c.geom1, c.geom2
+            if self.bone[g1] and self.bone[g2]:
+                mujoco.mj_contactForce(self.model, data, i, self._force)
+                rigid += self._force[0]
+                continue
+            depth = -c.dist
+            for g in (g1, g2):
+                r = self.region_of[g]
+                if r >= 0 and depth > 0:
+                    r1, r2 = self.radius[g1], self.radius[g2]
+                    area[r] += 2.0 * np.pi * r1 * r2 / (r1 + r2) * depth * 1e6
+        return area, rigid
 
 
 def _contacts(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
@@ -70,14 +129,15 @@ def _contacts(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
 
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
-                  controller: str = "open-loop", seed: int = 0, record_every: int = 10,
+                  controller: str = "neutral", seed: int = 0, record_every: int = 10,
                   **env_kwargs) -> HandshakeRun:
     """Run one episode; keep every ``record_every``-th physics step for the recording."""
     env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
     ctrl = make_controller(controller)
     obs, info = env.reset(seed=seed)
     m, d = env.model, env.data
-    frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph")}
+    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms])
+    frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r")}
     steps, wall = 0, 0.0
     while True:
         t0 = time.perf_counter()
@@ -92,10 +152,14 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["f"].append([info["region_forces_N"][r] for r in env.region_names])
             frames["c"].append(_contacts(m, d))
             frames["ph"].append(info["phase"])
+            area, rigid = areas(d)
+            frames["a"].append(area)
+            frames["r"].append(rigid)
         if term or trunc:
             break
     if term:
         raise FloatingPointError(f"the handshake became unstable at t = {d.time:.3f} s")
     return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]),
                         np.array(frames["q"]), np.array(frames["mp"]), np.array(frames["mq"]),
-                        np.array(frames["f"]), frames["c"], frames["ph"], wall, steps, m)
+                        np.array(frames["f"]), frames["c"], frames["ph"], wall, steps, m,
+                        np.array(frames["a"]), np.array(frames["r"]))

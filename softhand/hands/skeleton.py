@@ -59,7 +59,8 @@ LIMIT_SOLREF: tuple[float, float] = (0.005, 1.0)
 def new_spec(
     model_name: str, *, timestep_s: float = 0.001, gravity_m_s2: float = 9.81
 ) -> mujoco.MjSpec:
-    """An empty spec with softhand's options: implicitfast, elliptic cones, radians, no floor."""
+    """An empty spec with softhand's options: implicitfast, elliptic cones, radians, no floor,
+    convex collision tolerance 0.1 mm."""
     if not (math.isfinite(timestep_s) and 0.0 < timestep_s <= 0.01):
         raise ValueError(f"timestep_s = {timestep_s!r} s: allowed range (0, 0.01] s")
     spec = mujoco.MjSpec()
@@ -69,6 +70,10 @@ def new_spec(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.gravity = [0.0, 0.0, -gravity_m_s2]
+    # convex collision (ellipsoid skins) converged to 0.1 mm instead of 1 um: a quarter of a
+    # handshake step saved; region forces change by < 4 mN, depths by < 0.08 mm (measured at four
+    # instants of a handshake against 1e-6)
+    spec.option.ccd_tolerance = 1e-4
     return spec
 
 
