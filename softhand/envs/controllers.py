@@ -10,7 +10,8 @@ thumb flexion, thumb rotation; positive closes):
   target grip force, open a little when over it (a proportional force loop on the region forces).
 * :class:`Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
   waiting for the partner"): per digit, close until the digit first touches the partner, then hold
-  that posture (the motors are not back-drivable) until the partner lets go. The default of
+  that posture (the motors are not back-drivable) until the partner lets go; the thumb is not
+  rotated into opposition, it closes over the back of the partner's hand. The default of
   ``softhand handshake``, since it is the scenario of the paper's Fig. 4.
 """
 
@@ -74,7 +75,8 @@ class ForceRegulating:
 
 @dataclass
 class Neutral:
-    """Close each digit at ``speed`` until its most loaded region exceeds ``touch_N``, then hold."""
+    """Close each digit at ``speed`` until its most loaded region exceeds ``touch_N``, then hold;
+    no thumb rotation."""
 
     speed: float = 0.5
     touch_N: float = 0.3
@@ -97,7 +99,7 @@ class Neutral:
             touching = max(v for k, v in forces.items() if k.startswith(digit)) > self.touch_N
             self._held[i] |= touching
             a[i] = 0.0 if self._held[i] else self.speed
-        a[5] = 1.0
+        a[5] = 0.0  # the thumb stays lateral, over the back of the partner's hand: no opposition
         return a
 
 

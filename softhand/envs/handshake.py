@@ -39,8 +39,13 @@ class HandshakeEnv(gym.Env):
     The prosthetic hand (fixed, thumb up) wears a calibrated skin on each of the paper's 18 regions
     (Fig. 1: Thumb1-2, Index1-3, Middle1-3, Ring1-3, Little1-3, Palm1-2, Back1-2; 1 = proximal).
     The partner reaches, grips to a human grip force, shakes at 4 Hz, lets go and leaves
-    (:mod:`softhand.envs.partner`, published timings). Contact forces come from calibrated soft
-    contacts (skin in series with human tissue), read by one touch sensor per region.
+    (:mod:`softhand.envs.partner`, published timings). Its hand rides a compliant arm (a soft weld
+    to the scripted target) and meets the prosthetic hand palm to palm, web space to web space,
+    the hands crossed at 60 deg so that each hand's fingers wrap around the other's ulnar border
+    (:mod:`softhand.hands.scene`). Contact forces come from calibrated soft contacts (skin in series
+    with human tissue; the bare shell of the thenar and the palm borders against tissue with the
+    tissue alone), read by one touch sensor per region. The partner regulates the force it feels
+    on its own hand (19 touch sensors); its grip acts once per action step, its arm every step.
 
     Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
     (positive closes; the maximum closes a digit from open in about 1 s):
@@ -76,6 +81,10 @@ class HandshakeEnv(gym.Env):
 
     Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
     simulation produces a non-finite state (then ``info["unstable"]`` is True).
+
+    Timestep: the skins are calibrated for 0.5-2 ms; 1 ms (the default) and 0.5 ms agree; 2 ms runs
+    twice as fast with similar forces under a gentle grip but larger peaks when motors slam
+    (``softhand bench handshake``).
 
     ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
