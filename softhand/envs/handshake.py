@@ -82,8 +82,9 @@ class HandshakeEnv(gym.Env):
     Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
     simulation produces a non-finite state (then ``info["unstable"]`` is True).
 
-    Timestep: the skins are calibrated for 0.5-2 ms; 1 ms (the default) and 0.5 ms agree; 2 ms runs
-    twice as fast with similar forces under a gentle grip but larger peaks when motors slam
+    Timestep: the skins are calibrated for 0.5-2 ms; 1 ms (the default) and 0.5 ms agree (neutral
+    grip: same regions over 2 N, peaks within 5 %); 2 ms runs nearly twice as fast with the same
+    regions under a gentle grip but a 2.4x larger peak with the open-loop controller
     (``softhand bench handshake``).
 
     ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
