@@ -125,7 +125,7 @@ def _markdown(d: dict[str, Any]) -> str:
         "# Handshake benchmark (`softhand bench handshake`)", "",
         f"Machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}, MuJoCo {m['mujoco']}; "
         f"git {d['git_revision']}. One process, one core for the simulation.", "",
-        "Speed of one 3.63 s handshake (pocket2-sil, neutral controller, 36 touch sensors), best of "
+        "Speed of one 3.63 s handshake (pocket2-sil, neutral controller, 37 touch sensors), best of "
         f"{REPEATS}; recording on adds the time to write the rerun file:", "",
         "| timestep | recording | steps/s | real-time factor |", "|---|---|---|---|",
     ]
