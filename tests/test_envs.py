@@ -5,6 +5,7 @@ from __future__ import annotations
 import shutil
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
@@ -12,6 +13,7 @@ from gymnasium.utils.env_checker import check_env
 import softhand.envs  # noqa: F401  (registers softhand/Handshake-v0)
 from softhand.envs import HandshakeEnv
 from softhand.envs.controllers import make_controller
+from softhand.envs.run import ContactAreas, mean_curvature_radius
 from softhand.envs.skins import SKIN_CHOICES, parse_skins
 from softhand.skin.files import SHIPPED_DIR
 
@@ -111,3 +113,32 @@ def test_corrupt_calibration_file_names_the_file(tmp_path):
     (tmp_path / "pocket2-sil.json").write_text("{ not json")
     with pytest.raises(ValueError, match="pocket2-sil"):
         HandshakeEnv(design="pocket2-sil", calibration_dir=tmp_path)
+
+
+def test_contact_area_is_the_overlap_circle_of_two_spheres():
+    """Two spheres (R1 = 10 mm, R2 = 30 mm) pressed 1 mm into each other: the circle where the
+    surfaces cross has area 2 pi R1 R2 / (R1 + R2) delta (to first order in delta)."""
+    model = mujoco.MjModel.from_xml_string("""
+    <mujoco><worldbody>
+      <geom name="skin_A" type="sphere" size="0.010"/>
+      <body pos="0 0 0.039"><freejoint/><geom name="tissue_B" type="sphere" size="0.030"/></body>
+      <body pos="0.2 0 0"><freejoint/><geom name="bone_a" type="capsule" size="0.01 0.02"/></body>
+      <body pos="0.2 0 0.0195"><freejoint/><geom name="bone_b" type="sphere" size="0.01"/></body>
+    </worldbody></mujoco>""")
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    assert mean_curvature_radius(model, 0) == 0.010
+    assert mean_curvature_radius(model, 2) == pytest.approx(0.020)  # capsule: 2 r
+    area, rigid = ContactAreas(model, [0])(data)
+    assert area[0] == pytest.approx(2 * np.pi * 10 * 30 / 40 * 1.0, rel=1e-6)  # mm^2
+    d, r1, r2 = 39.0, 10.0, 30.0  # exact circle of intersection of the two sphere surfaces
+    exact = np.pi * (4 * d**2 * r1**2 - (d**2 - r2**2 + r1**2) ** 2) / (4 * d**2)
+    assert area[0] == pytest.approx(exact, rel=0.05)
+    assert rigid > 0.0  # the bone capsule and bone sphere touch: force counted as bone on bone
+
+
+def test_ellipsoid_mean_curvature_radius_at_its_flattest_pole():
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><geom type="ellipsoid" size="0.02 0.01 0.005"/></worldbody></mujoco>')
+    # principal radii at the 5 mm pole: 20^2/5 = 80 mm and 10^2/5 = 20 mm; harmonic mean 32 mm
+    assert mean_curvature_radius(model, 0) == pytest.approx(0.032)
