@@ -24,7 +24,7 @@ def main(target_N: float = 2.5, seed: int = 0) -> dict[str, float]:
     obs, info = env.reset(seed=seed)
     held: dict[str, list[float]] = {d: [] for d in DIGITS}
     while True:
-        obs, reward, terminated, truncated, info = env.step(controller(obs, info))
+        obs, _reward, terminated, truncated, info = env.step(controller(obs, info))
         if info["phase"] == "shake":
             for d in DIGITS:
                 held[d].append(max(v for k, v in info["region_forces_N"].items()

@@ -22,7 +22,7 @@ def peaks(design: str, speed: float, seed: int = 0) -> dict[str, float]:
     obs, info = env.reset(seed=seed)
     peak = dict.fromkeys(info["region_forces_N"], 0.0)
     while True:
-        obs, reward, terminated, truncated, info = env.step(controller(obs, info))
+        obs, _reward, terminated, truncated, info = env.step(controller(obs, info))
         for k, v in info["region_forces_N"].items():
             peak[k] = max(peak[k], v)
         if terminated or truncated:

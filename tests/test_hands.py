@@ -188,8 +188,9 @@ def test_hand_length_and_width_match_paper(build, prefix):
     # the palm's borders, the partner a tissue geom there)
     palm_geoms = _body_geoms(model, f"{prefix}palm")
     skin = HandConfig().skin_thickness_m
-    def reach(g, u):  # noqa: E306
-        return _support(model, data, g, u) + (skin if "bone" in model.geom(g).name else 0.0)
+    def reach(g, u):
+        bone = "bone" in model.geom(g).name
+        return _support(model, data, g, u) + (skin if bone else 0.0)
     width = max(reach(g, y) for g in palm_geoms) + max(reach(g, -y) for g in palm_geoms)
     assert length == pytest.approx(PAPER_LENGTH_M, rel=0.03)
     assert width == pytest.approx(PAPER_WIDTH_M, rel=0.03)
