@@ -95,11 +95,6 @@ class HandLayout:
     def total_mass_kg(self) -> float:
         return self.palm_mass_kg + sum(sum(d.masses_kg.values()) for d in self.digits.values())
 
-    def pip_x_m(self) -> float:
-        """x of the middle finger's PIP joint, fingers extended (m): the handshake overlap."""
-        d = self.digits["middle"]
-        return d.base_m[0] + d.lengths_m["proximal"]
-
 
 def _capsule_volume(radius: float, length: float, *, closed_end: bool) -> float:
     """Envelope volume of a segment: a cylinder, plus a hemisphere at the tip of a distal segment."""

@@ -59,8 +59,9 @@ def partner_quat(crossing_angle_deg: float) -> np.ndarray:
     (-cos b, 0, -sin b) and the radial side along (-sin b, 0, cos b); the back faces +Y.
     """
     b = np.radians(crossing_angle_deg)
-    return np.array(quat_from_axes(np.array([-np.cos(b), 0.0, -np.sin(b)]),
-                          np.array([-np.sin(b), 0.0, np.cos(b)]), np.array([0.0, 1.0, 0.0])))
+    fingers = np.array([-np.cos(b), 0.0, -np.sin(b)])
+    radial = np.array([-np.sin(b), 0.0, np.cos(b)])
+    return np.array(quat_from_axes(fingers, radial, np.array([0.0, 1.0, 0.0])))
 
 
 def web_point(layout: HandLayout) -> np.ndarray:
