@@ -40,7 +40,7 @@ import mujoco
 from softhand.hands import constants as const
 from softhand.hands.config import PartnerConfig
 from softhand.hands.layout import hand_layout
-from softhand.hands.skeleton import add_skeleton, angle, joint_key, new_spec
+from softhand.hands.skeleton import add_skeleton, add_touch_sensor, angle, joint_key, new_spec
 
 __all__ = [
     "TISSUE_SEGMENTS",
@@ -55,7 +55,6 @@ _ELLIPSOID = mujoco.mjtGeom.mjGEOM_ELLIPSOID
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 _BONE_RGBA = (0.55, 0.42, 0.38, 1.0)
 _TISSUE_RGBA = (0.87, 0.68, 0.58, 0.5)
-_SITE_MARGIN_M = 0.0015  # touch zones reach this far beyond the tissue surface
 
 #: Segments carrying a tissue geom, in the order partner_tissue_geoms() returns them.
 TISSUE_SEGMENTS: tuple[str, ...] = (
@@ -186,11 +185,7 @@ def add_partner_hand(
             size=size,
             **kw,
         )
-        # what the partner feels: a touch sensor on a zone enclosing the tissue
-        zone = [v + _SITE_MARGIN_M if v > 0 else 0.0 for v in size]
-        body.add_site(name=f"{prefix}feel_{name}", size=zone, group=4, **kw)
-        spec.add_sensor(name=f"{prefix}feel_{name}", type=mujoco.mjtSensor.mjSENS_TOUCH,
-                        objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{prefix}feel_{name}")
+        add_touch_sensor(spec, body, f"{prefix}feel_{name}", size=size, **kw)  # what it feels
 
     xm, half_w, az = layout.palm_length_m, 0.5 * layout.width_m, 0.35 * t
     for name, sign in (("palm", -1.0), ("back", 1.0)):

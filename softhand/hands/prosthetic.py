@@ -48,7 +48,7 @@ import mujoco
 from softhand.hands import constants as const
 from softhand.hands.config import ProstheticConfig
 from softhand.hands.layout import HandLayout, hand_layout
-from softhand.hands.skeleton import LIMIT_SOLREF, add_skeleton, new_spec
+from softhand.hands.skeleton import LIMIT_SOLREF, add_skeleton, add_touch_sensor, new_spec
 from softhand.paper import paper
 
 __all__ = [
@@ -80,7 +80,6 @@ REGION_SEGMENTS: dict[str, str] = {
 }
 
 #: Gap between a skin ellipsoid and the touch site that encloses it, per semi-axis (m).
-_SITE_MARGIN_M = 0.0015
 _SKIN_RGBA = (0.93, 0.80, 0.70, 0.6)
 _BONE_RGBA = (0.35, 0.36, 0.40, 1.0)
 _SITE_RGBA = (0.2, 0.6, 1.0, 0.15)
@@ -152,20 +151,8 @@ def _add_region(
         group=1,
         rgba=list(_SKIN_RGBA),
     )
-    body.add_site(
-        name=f"{prefix}touch_{region}",
-        type=_ELLIPSOID,
-        pos=centre,
-        size=[h + _SITE_MARGIN_M for h in half],
-        group=4,
-        rgba=list(_SITE_RGBA),
-    )
-    spec.add_sensor(
-        name=f"{prefix}touch_{region}",
-        type=mujoco.mjtSensor.mjSENS_TOUCH,
-        objtype=mujoco.mjtObj.mjOBJ_SITE,
-        objname=f"{prefix}touch_{region}",
-    )
+    add_touch_sensor(spec, body, f"{prefix}touch_{region}", size=half, type=_ELLIPSOID,
+                     pos=centre, rgba=list(_SITE_RGBA))
 
 
 def _couple(spec: mujoco.MjSpec, name: str, follower: str, driver: str, ratio: float) -> None:

@@ -36,8 +36,10 @@ from softhand.hands.layout import HandLayout
 
 __all__ = [
     "LIMIT_SOLREF",
+    "TOUCH_ZONE_MARGIN_M",
     "Skeleton",
     "add_skeleton",
+    "add_touch_sensor",
     "angle",
     "joint_key",
     "new_spec",
@@ -48,6 +50,20 @@ __all__ = [
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
 _SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
 _HINGE = mujoco.mjtJoint.mjJNT_HINGE
+
+#: How far a touch sensor's zone reaches beyond the soft geom it encloses (m).
+TOUCH_ZONE_MARGIN_M = 0.0015
+
+
+def add_touch_sensor(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, *,
+                     size: list[float], **placement) -> None:
+    """A site named ``name`` enclosing a soft geom of ``size`` (same type and placement, every
+    nonzero size grown by TOUCH_ZONE_MARGIN_M) and a touch sensor of the same name on it."""
+    zone = [v + TOUCH_ZONE_MARGIN_M if v > 0 else 0.0 for v in size]
+    body.add_site(name=name, size=zone, group=4, **placement)
+    spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_TOUCH,
+                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name)
+
 
 #: solref (time constant s, damping ratio) of joint limits and joint couplings. MuJoCo's default
 #: (0.02, 1) scales the constraint stiffness with the tiny inertia of a phalanx, so a few N m from
