@@ -129,7 +129,8 @@ def test_contact_area_is_the_overlap_circle_of_two_spheres():
     mujoco.mj_forward(model, data)
     assert mean_curvature_radius(model, 0) == 0.010
     assert mean_curvature_radius(model, 2) == pytest.approx(0.020)  # capsule: 2 r
-    area, rigid = ContactAreas(model, [0])(data)
+    area, rigid, rows = ContactAreas(model, [0])(data)
+    assert rows.shape == (2, 7) and np.all(rows[:, 6] > 0)  # two contacts, positive forces
     assert area[0] == pytest.approx(2 * np.pi * 10 * 30 / 40 * 1.0, rel=1e-6)  # mm^2
     d, r1, r2 = 39.0, 10.0, 30.0  # exact circle of intersection of the two sphere surfaces
     exact = np.pi * (4 * d**2 * r1**2 - (d**2 - r2**2 + r1**2) ** 2) / (4 * d**2)

@@ -95,16 +95,23 @@ class ContactAreas:
         self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
         self.bone = np.array(["bone_" in (model.geom(g).name or "") for g in range(model.ngeom)])
         self.model = model
+        self.n_regions = len(region_geoms)
         self._force = np.zeros(6)
 
-    def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float]:
-        area = np.zeros(int(self.region_of.max()) + 1)
+    def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float, np.ndarray]:
+        """Area per region (mm^2), bone-on-bone force (N), and per active contact a row of
+        position xyz (m), normal xyz and normal force (N), as the recording takes them."""
+        area = np.zeros(self.n_regions)
         rigid = 0.0
+        rows = []
         for i in range(data.ncon):
             c = data.contact[i]
+            if c.efc_address < 0:
+                continue
+            mujoco.mj_contactForce(self.model, data, i, self._force)
+            rows.append([*c.pos, *c.frame[:3], self._force[0]])
             g1, g2 = c.geom1, c.geom2
             if self.bone[g1] and self.bone[g2]:
-                mujoco.mj_contactForce(self.model, data, i, self._force)
                 rigid += self._force[0]
                 continue
             depth = -c.dist
@@ -113,19 +120,7 @@ class ContactAreas:
                 if r >= 0 and depth > 0:
                     r1, r2 = self.radius[g1], self.radius[g2]
                     area[r] += 2.0 * np.pi * r1 * r2 / (r1 + r2) * depth * 1e6
-        return area, rigid
-
-
-def _contacts(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
-    rows = []
-    force = np.zeros(6)
-    for i in range(data.ncon):
-        c = data.contact[i]
-        if c.efc_address < 0:
-            continue
-        mujoco.mj_contactForce(model, data, i, force)
-        rows.append([*c.pos, *c.frame[:3], force[0]])
-    return np.asarray(rows, dtype=float).reshape(-1, 7)
+        return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
 
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
@@ -150,9 +145,9 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["mp"].append(d.mocap_pos.copy())
             frames["mq"].append(d.mocap_quat.copy())
             frames["f"].append([info["region_forces_N"][r] for r in env.region_names])
-            frames["c"].append(_contacts(m, d))
             frames["ph"].append(info["phase"])
-            area, rigid = areas(d)
+            area, rigid, rows = areas(d)
+            frames["c"].append(rows)
             frames["a"].append(area)
             frames["r"].append(rigid)
         if term or trunc:

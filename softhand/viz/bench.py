@@ -5,7 +5,7 @@ Measures, in one process on this machine (``softhand bench handshake``):
 * speed of the default handshake (pocket2-sil everywhere, neutral controller, 1 ms step, all 18
   touch sensors and the partner's 19): steps per second and real-time factor of ``env.step`` with
   the rerun recording off, and with it on (the recording's write time added), best of REPEATS runs;
-  the same for timesteps 0.5 and 2 ms; and the physics alone (``mj_step``);
+  the same for timesteps 0.5 and 2 ms;
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
   wearing rigid shells, the commercial skin (prosthetic-102l) and the paper's designs: per skin and
   region the peak force and the peak contact area, the regions over 2 N and their overlap with the
@@ -63,22 +63,6 @@ def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
     return best
 
 
-def _physics_only() -> dict[str, float]:
-    """mj_step alone over a recorded handshake's states (no Python env, no controller)."""
-    run = run_handshake()
-    model = run.model
-    data = mujoco.MjData(model)
-    steps = 0
-    t0 = time.perf_counter()
-    for q, mp in zip(run.qpos, run.mocap_pos, strict=True):
-        data.qpos[:] = q
-        data.mocap_pos[:] = mp
-        mujoco.mj_step(model, data, nstep=10)
-        steps += 10
-    wall = time.perf_counter() - t0
-    return {"steps_per_s": steps / wall, "realtime_factor": steps * model.opt.timestep / wall}
-
-
 def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
     ref = set(paper()["handshake"]["over_2N"])
     out: dict[str, Any] = {}
@@ -111,7 +95,6 @@ def run_handshake_benchmark(out_dir: str | Path = "reports", *,
     data["speed"] = {f"{ts * 1000:g} ms": {"recording_off": _speed(ts, record=False),
                                           "recording_on": _speed(ts, record=True)}
                      for ts in (0.001, 0.0005, 0.002)}
-    data["physics_only_1ms"] = _physics_only()
     data["sensitivity"] = {c: _sensitivity(skins, c) for c in ("neutral", "open-loop")}
     atomic_write_json(out / "bench-handshake.json", data)
     md = _markdown(data)
@@ -133,9 +116,7 @@ def _markdown(d: dict[str, Any]) -> str:
         for label, key in (("off", "recording_off"), ("on", "recording_on")):
             r = rows[key]
             lines.append(f"| {ts} | {label} | {r['steps_per_s']:.0f} | {r['realtime_factor']:.1f}x |")
-    p = d["physics_only_1ms"]
-    lines += ["", f"Physics alone (`mj_step`, 1 ms): {p['steps_per_s']:.0f} steps/s, "
-              f"{p['realtime_factor']:.1f}x real time.", ""]
+    lines.append("")
     for controller, table in d["sensitivity"].items():
         skins = list(table)
         lines += [f"## Skins side by side, controller `{controller}` (seed 0)", "",
