@@ -15,6 +15,7 @@ is written then.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -277,18 +278,26 @@ def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
               default="neutral", show_default=True,
               help="Controller of the prosthetic hand (neutral: the paper's sensored hand).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the partner.")
+@click.option("--timestep", "timestep_s", type=click.FloatRange(0.0, 0.01, min_open=True),
+              default=0.001, show_default=True,
+              help="Physics timestep (s); skins are calibrated for 0.0005-0.002. Actions stay "
+                   "at 100 Hz.")
 @click.option("--record", "record_path", type=click.Path(dir_okay=False), default=None,
               help="Write a rerun recording (.rrd) here.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def handshake(design, skin_items, controller, seed, record_path, as_json) -> None:
+def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_json) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.run import OVER_N, run_handshake
     from softhand.envs.skins import parse_skins
 
+    if not math.isfinite(timestep_s):  # FloatRange lets nan through
+        raise click.BadParameter(f"{timestep_s} is not in the range 0.0<x<=0.01",
+                                 param_hint="'--timestep'")
     overrides = _parse_skin_overrides(skin_items)
     try:
         parse_skins(design, overrides)
-        run = run_handshake(design=design, skins=overrides, controller=controller, seed=seed)
+        run = run_handshake(design=design, skins=overrides, controller=controller, seed=seed,
+                            timestep_s=timestep_s, frame_skip=max(1, round(0.01 / timestep_s)))
     except ValueError as exc:
         _fail(exc)
     if record_path:

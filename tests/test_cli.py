@@ -148,6 +148,8 @@ def test_handshake_json_and_recording(tmp_path):
     (["handshake", "--skin", "Palm1"], "is not REGION=DESIGN"),
     (["handshake", "--skin", "Pinky9=rigid"], "region 'Pinky9' is unknown"),
     (["handshake", "--design", "jelly"], "skin design 'jelly' is unknown"),
+    (["handshake", "--timestep", "0.05"], "0.05 is not in the range 0.0<x<=0.01"),
+    (["handshake", "--timestep", "nan"], "nan is not in the range 0.0<x<=0.01"),
 ])
 def test_handshake_bad_input_names_the_value(args, needle):
     res = CliRunner().invoke(main, args)
