@@ -118,7 +118,9 @@ class PartnerConfig:
         wrist_torque_nm: wrist actuator torque limit (N m).
         passive_stiffness_nm_per_rad: passive stiffness of an MCP-like joint (N m/rad); other joints
             are scaled so that all joints of a free digit reach their limits together.
-        joint_damping_nm_s_per_rad: damping of each finger joint (N m s/rad).
+        joint_damping_nm_s_per_rad: damping of each finger joint (N m s/rad); the wrist has 10x.
+        mechanical_time_constant_s: each partner joint gets armature = damping x this (kg m^2), so
+            that no joint relaxes faster than the largest supported timestep (constants.PARTNER).
         forearm_length_m: length of the rigid forearm stub between the mount and the wrist (m).
     """
 
@@ -130,6 +132,7 @@ class PartnerConfig:
     wrist_torque_nm: float = const.PARTNER["wrist_torque_nm"]
     passive_stiffness_nm_per_rad: float = const.PARTNER["passive_stiffness_nm_per_rad"]
     joint_damping_nm_s_per_rad: float = const.PARTNER["joint_damping_nm_s_per_rad"]
+    mechanical_time_constant_s: float = const.PARTNER["mechanical_time_constant_s"]
     forearm_length_m: float = 0.10
 
     def __post_init__(self) -> None:
@@ -144,6 +147,7 @@ class PartnerConfig:
         _check(
             "joint_damping_nm_s_per_rad", self.joint_damping_nm_s_per_rad, 0.0, 10.0, "N m s/rad"
         )
+        _check("mechanical_time_constant_s", self.mechanical_time_constant_s, -1e-12, 0.1, "s")
         _check("forearm_length_m", self.forearm_length_m, 0.0, 0.5, "m")
 
 

@@ -253,5 +253,13 @@ PARTNER = MappingProxyType(
         # torques above it bounds a free digit's flexion speed to ~20 rad/s, the order of fast
         # voluntary finger flexion.
         "joint_damping_nm_s_per_rad": 0.05,
+        # numerical, not anatomical: armature = damping x this time, on every partner joint. A
+        # distal phalanx alone has ~2e-7 kg m^2 about its joint, so under the damping above its
+        # motion relaxes in ~4 us: far below a 1 ms step. MuJoCo's constraint solver (mass matrix M)
+        # and the implicit integrator (M + h D) then disagree by h b / I ~ 260 at 1 ms; the joint
+        # limits released the distal joints by up to 0.95 rad and results depended on the timestep.
+        # At 2 ms (the largest supported step) the two agree within a factor 2, and since the digit
+        # moves on a 0.1 s time scale set by its damping, motion slower than 2 ms is unchanged.
+        "mechanical_time_constant_s": 0.002,
     }
 )

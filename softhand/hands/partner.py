@@ -141,7 +141,9 @@ def add_partner_hand(
 
     # Passive springs: k_j = k0 x 90 deg / (upper limit of joint j), so a free digit's joints
     # reach their upper limits together under one tendon pull.
+    # Armature = damping x mechanical time constant (constants.PARTNER: why).
     k0, damping = config.passive_stiffness_nm_per_rad, config.joint_damping_nm_s_per_rad
+    armature = damping * config.mechanical_time_constant_s
     options = {}
     for digit, shorts in _DIGIT_JOINTS.items():
         for short in shorts:
@@ -149,8 +151,9 @@ def add_partner_hand(
             options[key] = {
                 "stiffness": [k0 * 90.0 / rng[key][1], 0.0, 0.0],
                 "damping": [damping, 0.0, 0.0],
+                "armature": armature,
             }
-    options["thumb_rot"] = {"damping": [damping, 0.0, 0.0]}
+    options["thumb_rot"] = {"damping": [damping, 0.0, 0.0], "armature": armature}
     skel = add_skeleton(
         spec,
         forearm,
@@ -170,7 +173,7 @@ def add_partner_hand(
             axis=list(axis),
             range=[angle(spec, math.radians(lo)), angle(spec, math.radians(hi))],
             damping=[10 * damping, 0.0, 0.0],
-            armature=1e-4,
+            armature=10 * armature,
         )
 
     # Tissues.
