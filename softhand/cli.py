@@ -279,7 +279,7 @@ def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
               help="Controller of the prosthetic hand (neutral: the paper's sensored hand).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the partner.")
 @click.option("--timestep", "timestep_s", type=click.FloatRange(0.0, 0.01, min_open=True),
-              default=0.001, show_default=True,
+              default=0.002, show_default=True,
               help="Physics timestep (s); skins are calibrated for 0.0005-0.002. Actions stay "
                    "at 100 Hz.")
 @click.option("--record", "record_path", type=click.Path(dir_okay=False), default=None,
@@ -297,7 +297,7 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     try:
         parse_skins(design, overrides)
         run = run_handshake(design=design, skins=overrides, controller=controller, seed=seed,
-                            timestep_s=timestep_s, frame_skip=max(1, round(0.01 / timestep_s)))
+                            timestep_s=timestep_s)
     except ValueError as exc:
         _fail(exc)
     if record_path:

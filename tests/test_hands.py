@@ -74,7 +74,7 @@ def test_scene_compiles_with_options(scene):
     _, model = scene
     assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
-    assert model.opt.timestep == pytest.approx(0.001)
+    assert model.opt.timestep == pytest.approx(0.002)
     np.testing.assert_allclose(model.opt.gravity, [0.0, 0.0, -9.81])
     assert model.nmocap == 1 and model.body("hum_base").mocapid[0] == 0
     assert model.body("pro_wrist").dofnum[0] == 0  # prosthetic fixed to the world

@@ -27,11 +27,14 @@ from softhand.hands import (
 )
 from softhand.skin.files import SHIPPED_DIR
 
-__all__ = ["DEFAULT_REWARD_WEIGHTS", "HandshakeEnv"]
+__all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "HandshakeEnv"]
 
 DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
 CONTACT_N = 0.05  # a region counts as touched above this force
 _NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+_GRIPPING = ("grip", "shake")
+ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
+DEFAULT_TIMESTEP_S = SceneConfig.timestep_s
 
 
 class HandshakeEnv(gym.Env):
@@ -60,7 +63,7 @@ class HandshakeEnv(gym.Env):
     ===== ====================================== =====
 
     Observation space: ``Box(-inf, inf, (2 n + 19,), float64)`` with n the prosthetic hand's
-    joints (34 by default):
+    joints (16 by default):
 
     ================= ====================================================== ======
     slice             quantity                                                unit
@@ -83,10 +86,10 @@ class HandshakeEnv(gym.Env):
     Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
     simulation produces a non-finite state (then ``info["unstable"]`` is True).
 
-    Timestep: the skins are calibrated for 0.5-2 ms; 1 ms (the default) and 0.5 ms agree (neutral
-    grip: same regions over 2 N, peaks within 5 %); 2 ms runs nearly twice as fast with the same
-    regions under a gentle grip but a 2.4x larger peak with the open-loop controller
-    (``softhand bench handshake``).
+    Timestep: the skins are calibrated for 0.5-2 ms (their rest laws hold at every step in that
+    range). 2 ms, the default, reproduces the region forces of 0.5 ms within a few percent for all
+    three controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
+    error against 0.5 ms for each timestep).
 
     ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
@@ -95,23 +98,29 @@ class HandshakeEnv(gym.Env):
         design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or
             ``rigid``; default: the most lifelike design).
         skins: region -> skin overrides.
-        frame_skip: physics steps per action (1 ms each by default), >= 1.
-        timestep_s: physics timestep, in (0, 0.01] s.
+        frame_skip: physics steps per action, >= 1; default: actions at 100 Hz
+            (``ACTION_PERIOD_S / timestep_s``, 5 steps of 2 ms).
+        timestep_s: physics timestep, in (0, 0.01] s; default 2 ms (SceneConfig).
         squeeze: multiplier of the partner's grip force (5 for the hard case), > 0.
         overload_N: region force above which the overload penalty applies.
         reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries.
         calibration_dir: folder of the skin calibration files (default: the shipped ones).
         randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
 
-    Version history: v0 (softhand 0.1): first release.
+    Version history: v0 (softhand 0.1, unreleased): first release; before the release the default
+    timestep went from 1 to 2 ms and the partner's joints got armature (region forces changed).
     """
 
     metadata: ClassVar[dict] = {"render_modes": [], "render_fps": 100}
 
     def __init__(self, *, design: str | None = None, skins: Mapping[str, str] | None = None,
-                 frame_skip: int = 10, timestep_s: float = 1e-3, squeeze: float = 1.0,
+                 frame_skip: int | None = None, timestep_s: float = DEFAULT_TIMESTEP_S,
+                 squeeze: float = 1.0,
                  overload_N: float = 10.0, reward_weights: Mapping[str, float] | None = None,
                  calibration_dir: str | Path | None = None, randomize: bool = True) -> None:
+        self.config = SceneConfig(timestep_s=timestep_s)  # checks the timestep
+        if frame_skip is None:
+            frame_skip = max(1, round(ACTION_PERIOD_S / timestep_s))
         if int(frame_skip) != frame_skip or frame_skip < 1:
             raise ValueError(f"frame_skip = {frame_skip!r} must be an integer >= 1")
         if not (np.isfinite(squeeze) and squeeze > 0):
@@ -129,7 +138,6 @@ class HandshakeEnv(gym.Env):
         self.squeeze = float(squeeze)
         self.overload_N = float(overload_N)
         self.randomize = randomize
-        self.config = SceneConfig(timestep_s=timestep_s)
         spec = scene_spec(self.config)
         add_skin_pairs(spec)
         self.model = spec.compile()
@@ -150,11 +158,17 @@ class HandshakeEnv(gym.Env):
         self._grip_act = np.array(hum[:5])
         self._opp_act = hum[5]
         self._mocap = m.body("hum_base").mocapid[0]
+        # views into MjData (its buffers never move): written or read every step
+        self._mocap_row = self.data.mocap_pos[self._mocap]
+        self._ctrl, self._sensordata = self.data.ctrl, self.data.sensordata
+        self._qpos, self._qvel = self.data.qpos, self.data.qvel
+        self._opp_max = float(m.actuator_ctrlrange[self._opp_act, 1])
         self._feel_adr = np.array([m.sensor_adr[i] for i in range(m.nsensor)
                                    if m.sensor(i).name.startswith("hum_feel_")])
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
+        self._obs_buffer = np.zeros(2 * n + 19)
         self._timeline = Timeline()
         self._script: PartnerScript | None = None
 
@@ -186,40 +200,45 @@ class HandshakeEnv(gym.Env):
 
     def step(self, action):
         a = np.asarray(action, dtype=np.float64)
-        if a.shape != (6,) or not np.all(np.isfinite(a)) or np.any(np.abs(a) > 1.0 + 1e-6):
+        # min/max are nan when any entry is: one comparison catches both
+        if a.shape != (6,) or not (-1.0 - 1e-6 <= a.min() and a.max() <= 1.0 + 1e-6):
             raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
                              "space: 6 finite values in [-1, 1]")
         if self._script is None:
             raise RuntimeError("call reset() before step()")
         m, d, script = self.model, self.data, self._script
-        d.ctrl[self._pro_act] = a * self._max_speed
+        ctrl, opt = self._ctrl, m.opt
+        ctrl[self._pro_act] = a * self._max_speed
         # the partner's grip acts once per action step (100 Hz by default), the arm every step
         t = d.time
-        feel = d.sensordata[self._feel_adr]
-        touched = feel > CONTACT_N
-        mean = float(feel[touched].mean()) if touched.any() else 0.0
-        d.ctrl[self._grip_act] = script.grip(t, mean, m.opt.timestep * self.frame_skip)
-        d.ctrl[self._opp_act] = m.actuator_ctrlrange[self._opp_act, 1] * (
-            script.timeline.phase(t) in ("grip", "shake"))
+        feel = self._sensordata[self._feel_adr]
+        touched = feel[feel > CONTACT_N]
+        mean = float(touched.mean()) if touched.size else 0.0
+        ctrl[self._grip_act] = script.grip(t, mean, opt.timestep * self.frame_skip)
+        ctrl[self._opp_act] = self._opp_max * (script.timeline.phase(t) in _GRIPPING)
         mount, k, last = self._mount, self._step_index, len(self._mount) - 1
+        end = k + self.frame_skip
+        row = self._mocap_row
         # sensors are read once per action step: skip them on the inner steps (they do not act on
         # the dynamics; 37 touch sensors are ~5 % of a step)
-        flags = m.opt.disableflags
-        m.opt.disableflags = flags | _NO_SENSORS
+        flags = opt.disableflags
+        opt.disableflags = flags | _NO_SENSORS
         try:
-            for i in range(k, k + self.frame_skip):
-                if i == k + self.frame_skip - 1:
-                    m.opt.disableflags = flags
-                d.mocap_pos[self._mocap] = mount[min(i, last)]
+            for i in range(k, end - 1):
+                row[:] = mount[min(i, last)]
                 mujoco.mj_step(m, d)
+            opt.disableflags = flags
+            row[:] = mount[min(end - 1, last)]
+            mujoco.mj_step(m, d)
         finally:
-            m.opt.disableflags = flags
-        self._step_index = k + self.frame_skip
-        self._forces = d.sensordata[self._sensor_adr].copy()
+            opt.disableflags = flags
+        self._step_index = end
+        self._forces = self._sensordata[self._sensor_adr]  # fancy indexing: a copy
         phase = script.timeline.phase(d.time)
-        unstable = not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)))
+        # a sum is finite only if every entry is (an overflow to inf is unstable anyway)
+        unstable = not np.isfinite(self._qpos.sum() + self._qvel.sum())
         terms = self._reward_terms(a, phase)
-        reward = float(sum(terms.values())) if not unstable else -100.0
+        reward = sum(terms.values()) if not unstable else -100.0
         truncated = d.time >= script.timeline.total_s - 1e-9
         info = self._info(terms, phase)
         info["unstable"] = unstable
@@ -228,27 +247,30 @@ class HandshakeEnv(gym.Env):
 
     # --- helpers -----------------------------------------------------------------------------
     def _obs(self) -> np.ndarray:
-        d = self.data
         total = self._script.timeline.total_s if self._script else self._timeline.total_s
-        return np.concatenate([d.qpos[self._pro_qpos], d.qvel[self._pro_dof], self._forces,
-                               [d.time / total]])
+        obs = self._obs_buffer.copy()
+        n = self._pro_qpos.size
+        obs[:n] = self._qpos[self._pro_qpos]
+        obs[n:2 * n] = self._qvel[self._pro_dof]
+        obs[2 * n:-1] = self._forces
+        obs[-1] = self.data.time / total
+        return obs
 
     def _reward_terms(self, a: np.ndarray, phase: str) -> dict[str, float]:
         w, f = self.weights, self._forces
-        touched = f > CONTACT_N
+        over = f[f > self.overload_N] - self.overload_N
         terms = {"grip": 0.0, "contact": 0.0,
-                 "overload": -w["overload"] * float(np.sum(np.maximum(0.0, f - self.overload_N)
-                                                          ** 2)),
+                 "overload": -w["overload"] * float(over @ over),
                  "effort": -w["effort"] * float(a @ a)}
-        if phase in ("grip", "shake"):
+        if phase in _GRIPPING:
             target = self._script.grip_force_N
-            mean = float(f[touched].mean()) if touched.any() else 0.0
+            touched = f[f > CONTACT_N]
+            mean = float(touched.mean()) if touched.size else 0.0
             terms["grip"] = -w["grip"] * ((mean - target) / target) ** 2
-            terms["contact"] = w["contact"] * float(touched.mean())
+            terms["contact"] = w["contact"] * touched.size / f.size
         return terms
 
     def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:
-        return {"region_forces_N": dict(zip(self.region_names, map(float, self._forces),
-                                            strict=True)),
+        return {"region_forces_N": dict(zip(self.region_names, self._forces.tolist(), strict=True)),
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
                 "partner_grip_N": self._script.grip_force_N if self._script else None}

@@ -24,7 +24,9 @@ shake moves both hands together and is left out, "a scene models only what it ne
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -52,17 +54,18 @@ class Timeline:
             if not (np.isfinite(v) and 0 < v <= 10):
                 raise ValueError(f"{name} = {v!r} s must be in (0, 10]")
 
-    @property
-    def ends(self) -> np.ndarray:
-        return np.cumsum([self.reach_s, self.grip_s, self.shake_s, self.release_s, self.return_s])
+    @cached_property
+    def ends(self) -> tuple[float, ...]:
+        """End time (s) of each phase but ``done``; computed once (the env asks every step)."""
+        return tuple(float(x) for x in np.cumsum([self.reach_s, self.grip_s, self.shake_s,
+                                                  self.release_s, self.return_s]))
 
     @property
     def total_s(self) -> float:
-        return float(self.ends[-1])
+        return self.ends[-1]
 
     def phase(self, t: float) -> str:
-        i = int(np.searchsorted(self.ends, t, side="right"))
-        return PHASES[min(i, len(PHASES) - 1)]
+        return PHASES[min(bisect_right(self.ends, t), len(PHASES) - 1)]
 
     def scaled(self, factor: float) -> Timeline:
         return Timeline(*(factor * v for v in (self.reach_s, self.grip_s, self.shake_s,

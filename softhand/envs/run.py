@@ -79,14 +79,28 @@ def mean_curvature_radius(model: mujoco.MjModel, geom: int) -> float:
     return float(max(size))
 
 
+def sphere_overlap_area(r1: float, r2: float, depth: float) -> float:
+    """Area (m^2) of the circle where two sphere surfaces of radii r1, r2 cross when pressed
+    ``depth`` into each other (centres r1 + r2 - depth apart); 0 without overlap, the smaller
+    cross-section once one sphere lies inside the other."""
+    if depth <= 0:
+        return 0.0
+    d = r1 + r2 - depth
+    if d <= abs(r1 - r2):
+        return float(np.pi * min(r1, r2) ** 2)
+    a2 = (4 * d * d * r1 * r1 - (d * d - r2 * r2 + r1 * r1) ** 2) / (4 * d * d)
+    return float(np.pi * max(a2, 0.0))
+
+
 class ContactAreas:
     """Per-region contact area and the force carried by bone on bone, from MuJoCo's contacts.
 
     Area estimate: each contact of a region's skin geom adds the area of the circle where the two
     undeformed surfaces, taken as spheres of each geom's mean curvature radius, intersect at the
-    contact's penetration depth delta: 2 pi R delta, R = R1 R2 / (R1 + R2). Softer skins sink
-    deeper at the same force, so their areas grow (the paper's argument for compliant skins); the
-    deformed patch of a real skin is larger still (an estimate, not an FE result).
+    contact's penetration depth delta (exact for two spheres: 2 pi R delta, R = R1 R2 / (R1 + R2),
+    to first order in delta, never more than the smaller sphere's cross-section). Softer skins
+    sink deeper at the same force, so their areas grow (the paper's argument for compliant
+    skins); the deformed patch of a real skin is larger still (an estimate, not an FE result).
     """
 
     def __init__(self, model: mujoco.MjModel, region_geoms: list[int]) -> None:
@@ -118,17 +132,18 @@ class ContactAreas:
             for g in (g1, g2):
                 r = self.region_of[g]
                 if r >= 0 and depth > 0:
-                    r1, r2 = self.radius[g1], self.radius[g2]
-                    area[r] += 2.0 * np.pi * r1 * r2 / (r1 + r2) * depth * 1e6
+                    area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
 
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
-                  controller: str = "neutral", seed: int = 0, record_every: int = 10,
+                  controller: str = "neutral", seed: int = 0, record_every: int | None = None,
                   **env_kwargs) -> HandshakeRun:
-    """Run one episode; keep every ``record_every``-th physics step for the recording."""
+    """Run one episode; keep every ``record_every``-th physics step for the recording (default:
+    the last step of every action, 100 Hz)."""
     env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
     ctrl = make_controller(controller)
+    record_every = record_every or env.frame_skip
     obs, info = env.reset(seed=seed)
     m, d = env.model, env.data
     areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms])

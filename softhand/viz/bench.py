@@ -2,10 +2,13 @@
 
 Measures, in one process on this machine (``softhand bench handshake``):
 
-* speed of the default handshake (pocket2-sil everywhere, neutral controller, 1 ms step, all 18
+* speed of the default handshake (pocket2-sil everywhere, neutral controller, 2 ms step, all 18
   touch sensors and the partner's 19): steps per second and real-time factor of ``env.step`` with
   the rerun recording off, and with it on (the recording's write time added), best of REPEATS runs;
-  the same for timesteps 0.5 and 2 ms;
+  the same for timesteps 1 and 0.5 ms;
+* error of each timestep: per controller and seed, the region forces at 2 ms and 1 ms against
+  0.5 ms (largest difference of a region's mean and peak force, relative change of the summed
+  mean forces, whether the regions over 2 N are the same);
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
   wearing rigid shells, the commercial skin (prosthetic-102l) and the paper's designs: per skin and
   region the peak force and the peak contact area, the regions over 2 N and their overlap with the
@@ -26,6 +29,7 @@ from typing import Any
 
 import mujoco
 
+from softhand.envs.controllers import CONTROLLERS
 from softhand.envs.run import OVER_N, HandshakeRun, run_handshake
 from softhand.fem.sweep import git_revision
 from softhand.io import atomic_write_json, atomic_write_text
@@ -35,6 +39,8 @@ from softhand.viz.recording import HandshakeFrames, record_handshake
 __all__ = ["SENSITIVITY_SKINS", "frames_of", "run_handshake_benchmark"]
 
 REPEATS = 3
+TIMESTEPS_S = (0.002, 0.001, 0.0005)  # the default first; the last is the reference of the errors
+ERROR_SEEDS = (0, 1, 2, 3)
 SENSITIVITY_SKINS = ("rigid", "prosthetic-102l", "solid-sil", "solid-pu", "pocket1-sil",
                      "pocket2-sil", "pocket2-pu")
 
@@ -48,7 +54,7 @@ def frames_of(run: HandshakeRun) -> HandshakeFrames:
 def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
     best: dict[str, float] | None = None
     for _ in range(REPEATS):
-        run = run_handshake(timestep_s=timestep_s, frame_skip=round(0.01 / timestep_s))
+        run = run_handshake(timestep_s=timestep_s)
         sim = float(run.time_s[-1])
         wall = run.wall_s
         if record:
@@ -56,11 +62,39 @@ def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
                 t0 = time.perf_counter()
                 record_handshake(Path(tmp) / "bench.rrd", run.model, frames_of(run))
                 wall += time.perf_counter() - t0
-        row = {"steps": run.steps, "wall_s": wall, "steps_per_s": run.steps / wall,
+        row = {"steps": run.steps, "sim_s": sim, "wall_s": wall, "steps_per_s": run.steps / wall,
                "realtime_factor": sim / wall}
         if best is None or row["wall_s"] < best["wall_s"]:
             best = row
     return best
+
+
+def _timestep_errors() -> dict[str, Any]:
+    """Per controller: the worst, over ERROR_SEEDS, of each timestep's error against the finest."""
+    *steps, ref_step = TIMESTEPS_S
+    out: dict[str, Any] = {}
+    for controller in CONTROLLERS:
+        worst = {f"{ts * 1000:g} ms": {"max_mean_diff_N": 0.0, "max_peak_diff_N": 0.0,
+                                      "sum_mean_change_pct": 0.0, "same_over_2N": 0}
+                 for ts in steps}
+        for seed in ERROR_SEEDS:
+            ref = run_handshake(controller=controller, seed=seed, timestep_s=ref_step)
+            ref_table = ref.table()
+            ref_sum = sum(v["mean_N"] for v in ref_table.values())
+            for ts in steps:
+                run = run_handshake(controller=controller, seed=seed, timestep_s=ts)
+                table = run.table()
+                w = worst[f"{ts * 1000:g} ms"]
+                w["max_mean_diff_N"] = max(w["max_mean_diff_N"], *(
+                    abs(table[r]["mean_N"] - v["mean_N"]) for r, v in ref_table.items()))
+                w["max_peak_diff_N"] = max(w["max_peak_diff_N"], *(
+                    abs(table[r]["peak_N"] - v["peak_N"]) for r, v in ref_table.items()))
+                change = 100 * (sum(v["mean_N"] for v in table.values()) / ref_sum - 1)
+                if abs(change) > abs(w["sum_mean_change_pct"]):
+                    w["sum_mean_change_pct"] = change
+                w["same_over_2N"] += set(run.over_2n) == set(ref.over_2n)
+        out[controller] = worst
+    return out
 
 
 def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
@@ -94,7 +128,8 @@ def run_handshake_benchmark(out_dir: str | Path = "reports", *,
                             "git_revision": git_revision()}
     data["speed"] = {f"{ts * 1000:g} ms": {"recording_off": _speed(ts, record=False),
                                           "recording_on": _speed(ts, record=True)}
-                     for ts in (0.001, 0.0005, 0.002)}
+                     for ts in TIMESTEPS_S}
+    data["timestep_error"] = _timestep_errors()
     data["sensitivity"] = {c: _sensitivity(skins, c) for c in ("neutral", "open-loop")}
     atomic_write_json(out / "bench-handshake.json", data)
     md = _markdown(data)
@@ -108,7 +143,8 @@ def _markdown(d: dict[str, Any]) -> str:
         "# Handshake benchmark (`softhand bench handshake`)", "",
         f"Machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}, MuJoCo {m['mujoco']}; "
         f"git {d['git_revision']}. One process, one core for the simulation.", "",
-        "Speed of one 3.63 s handshake (pocket2-sil, neutral controller, 37 touch sensors), best of "
+        f"Speed of one {next(iter(d['speed'].values()))['recording_off']['sim_s']:.2f} s handshake "
+        "(seed 0, pocket2-sil, neutral controller, 37 touch sensors, actions at 100 Hz), best of "
         f"{REPEATS}; recording on adds the time to write the rerun file:", "",
         "| timestep | recording | steps/s | real-time factor |", "|---|---|---|---|",
     ]
@@ -116,6 +152,16 @@ def _markdown(d: dict[str, Any]) -> str:
         for label, key in (("off", "recording_off"), ("on", "recording_on")):
             r = rows[key]
             lines.append(f"| {ts} | {label} | {r['steps_per_s']:.0f} | {r['realtime_factor']:.1f}x |")
+    ref = list(d["speed"])[-1]
+    lines += ["", f"Error of each timestep against {ref} (same controller and seed; worst of seeds "
+              f"{', '.join(map(str, ERROR_SEEDS))}; region forces from the touch sensors):", "",
+              "| controller | timestep | max diff of a region's mean N | max diff of a region's "
+              "peak N | summed mean forces | same regions > 2 N |", "|---|---|---|---|---|---|"]
+    for controller, rows in d["timestep_error"].items():
+        for ts, r in rows.items():
+            lines.append(f"| {controller} | {ts} | {r['max_mean_diff_N']:.2f} | "
+                         f"{r['max_peak_diff_N']:.2f} | {r['sum_mean_change_pct']:+.1f} % | "
+                         f"{r['same_over_2N']} of {len(ERROR_SEEDS)} |")
     lines.append("")
     for controller, table in d["sensitivity"].items():
         skins = list(table)
