@@ -121,7 +121,7 @@ def test_default_timestep_reproduces_half_a_millisecond(controller):
     fine = run_handshake(controller=controller, seed=1, timestep_s=0.0005).table()
     coarse = run_handshake(controller=controller, seed=1).table()
     diffs = [abs(coarse[r]["mean_N"] - v["mean_N"]) for r, v in fine.items()]
-    assert max(diffs) < 0.3, dict(zip(fine, np.round(diffs, 3)))
+    assert max(diffs) < 0.3, dict(zip(fine, np.round(diffs, 3), strict=True))
     total = sum(v["mean_N"] for v in fine.values())
     assert sum(v["mean_N"] for v in coarse.values()) == pytest.approx(total, rel=0.05)
 

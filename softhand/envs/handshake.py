@@ -201,7 +201,7 @@ class HandshakeEnv(gym.Env):
     def step(self, action):
         a = np.asarray(action, dtype=np.float64)
         # min/max are nan when any entry is: one comparison catches both
-        if a.shape != (6,) or not (-1.0 - 1e-6 <= a.min() and a.max() <= 1.0 + 1e-6):
+        if a.shape != (6,) or not (a.min() >= -1.0 - 1e-6 and a.max() <= 1.0 + 1e-6):
             raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
                              "space: 6 finite values in [-1, 1]")
         if self._script is None:
