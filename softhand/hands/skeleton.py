@@ -67,8 +67,8 @@ def add_touch_sensor(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, *,
 
 #: solref (time constant s, damping ratio) of joint limits and joint couplings. MuJoCo's default
 #: (0.02, 1) scales the constraint stiffness with the tiny inertia of a phalanx, so a few N m from
-#: the other hand would push a finger tens of degrees through its stop; 5 time steps of 1 ms make
-#: the stops 16x stiffer (keep it >= 2 time steps).
+#: the other hand would push a finger tens of degrees through its stop; 5 ms (2.5 steps of the
+#: handshake's 2 ms) makes the stops 16x stiffer (keep it >= 2 time steps: MuJoCo clamps it there).
 LIMIT_SOLREF: tuple[float, float] = (0.005, 1.0)
 
 
