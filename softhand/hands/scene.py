@@ -114,6 +114,9 @@ def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
     spec = new_spec(
         "softhand_handshake", timestep_s=config.timestep_s, gravity_m_s2=config.gravity_m_s2
     )
+    # Two hands in contact are one constraint island; finding islands every step cost more than
+    # solving them apart saved: 4-5 % of a handshake step, region forces equal to 1e-4 N.
+    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_ISLAND)
     spec.worldbody.add_light(name="key_light", pos=[0.1, -0.5, 1.8], dir=[0.0, 0.5, -1.0])
     wrist = spec.worldbody.add_body(
         name="pro_wrist",
