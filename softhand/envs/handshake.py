@@ -168,7 +168,6 @@ class HandshakeEnv(gym.Env):
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
-        self._obs_buffer = np.zeros(2 * n + 19)
         self._timeline = Timeline()
         self._script: PartnerScript | None = None
 
@@ -248,8 +247,8 @@ class HandshakeEnv(gym.Env):
     # --- helpers -----------------------------------------------------------------------------
     def _obs(self) -> np.ndarray:
         total = self._script.timeline.total_s if self._script else self._timeline.total_s
-        obs = self._obs_buffer.copy()
         n = self._pro_qpos.size
+        obs = np.empty(2 * n + 19)
         obs[:n] = self._qpos[self._pro_qpos]
         obs[n:2 * n] = self._qvel[self._pro_dof]
         obs[2 * n:-1] = self._forces

@@ -256,7 +256,7 @@ PARTNER = MappingProxyType(
         # numerical, not anatomical: armature = damping x this time, on every partner joint. A
         # distal phalanx alone has ~2e-7 kg m^2 about its joint, so under the damping above its
         # motion relaxes in ~4 us: far below a 1 ms step. MuJoCo's constraint solver (mass matrix M)
-        # and the implicit integrator (M + h D) then disagree by h b / I ~ 260 at 1 ms; the joint
+        # and the implicit integrator (M + h D) then disagree by h b / I up to 440 at 1 ms; the joint
         # limits released the distal joints by up to 0.95 rad and results depended on the timestep.
         # At 2 ms (the largest supported step) the two agree within a factor 2, and since the digit
         # moves on a 0.1 s time scale set by its damping, motion slower than 2 ms is unchanged.
