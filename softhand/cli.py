@@ -2,108 +2,292 @@
 
 ``softhand fe indent DESIGN``   one FE indentation (``--json`` for machine-readable output)
 ``softhand fe sweep``           all 12 designs, curves + summary + plot into calibration/fe
-``softhand fe export DESIGN``   an Abaqus input deck of the same model
+``softhand fe export DESIGN``   an Abaqus or CalculiX input deck of the same model
 ``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
 ``softhand handshake``          one handshake with shipped calibration: region forces, rerun recording
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
+``softhand bench handshake``    handshake speed and the skins side by side
 
-Bad input exits with status 2 and one line that names the value and the allowed range; nothing
-is written then.
+Every argument and input file is checked before any work starts. Exit status:
+
+== ===================================================================================
+0  done
+1  internal error (one line; ``SOFTHAND_TRACEBACK=1`` shows the traceback)
+2  bad input: one line ``error: ...`` naming the flag (or file, skin and key), the value and
+   the allowed range; nothing computed, nothing written
+3  an FE run or a calibration did not converge (what finished is written)
+130 interrupted by Ctrl-C: what had finished is written (atomically), nothing partial
+== ===================================================================================
+
+Default folders come from :mod:`softhand.paths` (the same for every command). Writing into the
+shipped ``calibration/`` needs the full set of designs or skins, or ``--force``.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import click
 
 from softhand import __version__
+from softhand.paths import FE_DIR, REPORTS_DIR, SKINS_DIR, is_shipped
 
-DEFAULT_FE_DIR = Path("calibration") / "fe"
+EXIT_INPUT, EXIT_CONVERGENCE, EXIT_INTERRUPTED = 2, 3, 130
 
 
-def _fail(exc: Exception) -> None:
-    raise click.UsageError(str(exc)) from None
+class InputError(click.ClickException):
+    """Bad input found before any work: one line, exit status 2."""
+
+    exit_code = EXIT_INPUT
+
+
+class Stopped(click.ClickException):
+    """Work that ended early (interrupted, not converged) after writing what finished."""
+
+    def __init__(self, message: str, exit_code: int) -> None:
+        super().__init__(message)
+        self.exit_code = exit_code
+
+
+def _bad(message: str) -> NoReturn:
+    raise InputError(message)
+
+
+class _Softhand(click.Group):
+    """The top-level group: errors become one line on stderr, never a traceback."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            click.echo(exc.format_message())
+            sys.exit(0)
+        except click.UsageError as exc:  # bad flag or value: name it, point at --help
+            hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx else ""
+            click.echo(f"error: {exc.format_message()}{hint}", err=True)
+            sys.exit(EXIT_INPUT)
+        except click.ClickException as exc:
+            click.echo(("" if isinstance(exc, Stopped) else "error: ") + exc.format_message(),
+                       err=True)
+            sys.exit(exc.exit_code)
+        except (click.Abort, KeyboardInterrupt):
+            click.echo("interrupted (Ctrl-C); nothing was written", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        except Exception as exc:
+            if os.environ.get("SOFTHAND_TRACEBACK"):
+                raise
+            click.echo(f"internal error: {type(exc).__name__}: {exc} "
+                       "(SOFTHAND_TRACEBACK=1 shows where)", err=True)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+class Number(click.ParamType):
+    """A finite number in a range; the message names the range and its unit."""
+
+    name = "number"
+
+    def __init__(self, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = "") -> None:
+        self.lo, self.hi, self.lo_open, self.hi_open, self.unit = lo, hi, lo_open, hi_open, unit
+
+    @property
+    def allowed(self) -> str:
+        left = "" if self.lo is None else f"{self.lo:g} {'<' if self.lo_open else '<='} "
+        right = "" if self.hi is None else f" {'<' if self.hi_open else '<='} {self.hi:g}"
+        return f"{left}x{right}" + (f" {self.unit}" if self.unit else "")
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float):
+            v = value
+        else:
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"{value!r} is not a number; allowed {self.allowed}", param, ctx)
+        below = self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo)
+        above = self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi)
+        if not math.isfinite(v) or below or above:
+            self.fail(f"{value!r} is outside the allowed range {self.allowed}", param, ctx)
+        return v
+
+
+def _checked_dir(path: str | None, flag: str) -> Path | None:
+    from softhand.io import check_writable_dir
+
+    if path is None:
+        return None
+    try:
+        return check_writable_dir(path, name=flag)
+    except ValueError as exc:
+        _bad(str(exc))
+
+
+def _checked_file(path: str | None, flag: str, suffix: str) -> Path | None:
+    from softhand.io import check_writable_file
+
+    if path is None:
+        return None
+    try:
+        return check_writable_file(path, suffix=suffix, name=flag)
+    except ValueError as exc:
+        _bad(str(exc))
+
+
+def _guard_shipped(out: Path, *, complete: bool, force: bool, what: str) -> None:
+    """Refuse to write an incomplete set into the shipped calibration unless ``--force``."""
+    if is_shipped(out) and not complete and not force:
+        _bad(f"--out {str(out)!r} is shipped calibration data and this run would replace it with "
+             f"{what}; write elsewhere with --out DIR, or add --force")
+
+
+@contextmanager
+def _progress(desc: str, *, disable: bool) -> Iterator[Callable[[float], None]]:
+    """A percent progress bar on stderr, closed (its line ended) before anything else prints."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=100, desc=desc, unit="%", disable=disable, file=sys.stderr)
+
+    def update(frac: float) -> None:
+        bar.update(round(100 * frac) - bar.n)
+
+    try:
+        yield update
+    finally:
+        bar.close()
+
+
+# --- FE options -----------------------------------------------------------------------------
+
+_OPT_MESH = click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),
+                         default="default", show_default=True,
+                         help="Mesh: default is graded to the pocket ends; fine doubles every count.")
+_OPT_MODE = click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d",
+                         show_default=True,
+                         help="3D quarter model, or fast 2D plane-strain cross-section.")
+_OPT_ELASTIC = click.option("--elastic-only", is_flag=True,
+                            help="Hyperfoam only, no Prony relaxation (no hold).")
+_OPT_MODULI = click.option("--moduli", type=click.Choice(["long-term", "instantaneous"]),
+                           default="long-term", show_default=True,
+                           help="How Table 3 moduli are read.")
+_OPT_HOLD = click.option("--hold", "hold_s", type=Number(0, 600, unit="s"), default=10.0,
+                         show_default=True, help="Hold after the ramp, 0-600 s.")
+_OPT_SPEED = click.option("--speed", "speed_mm_s", type=Number(0, 100, lo_open=True, unit="mm/s"),
+                          default=0.5, show_default=True, help="Plate speed, (0, 100] mm/s.")
+_OPT_FORCE = click.option("--max-force", "max_force_N",
+                          type=Number(0, 50, lo_open=True, unit="N"), default=2.0,
+                          show_default=True, help="Force that ends the ramp, (0, 50] N.")
+_OPT_DEPTH = click.option("--max-depth", "max_depth_mm",
+                          type=Number(0, 7, lo_open=True, unit="mm"), default=6.0,
+                          show_default=True,
+                          help="Plate travel that ends the ramp if the force is not reached "
+                               "first, (0, 7] mm (the phalanx is 9 mm high).")
+_OPT_GEOMETRY = click.option("--geometry", multiple=True, metavar="KEY=VALUE",
+                             help="Override a geometry field, e.g. pocket_roof_mm=1.5 (repeatable).")
+_OPT_MATERIALS = click.option("--materials", "materials_path",
+                              help="JSON file with material constants replacing Table 3, "
+                                   "e.g. {\"sil\": {\"mu_MPa\": [0.08, 0.01]}}.")
+_OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None,
+                            help="Cores to use [default: the CPUs this process may run on, at "
+                                 "most 4]. One FE run: element threads; a sweep or calibration: "
+                                 "designs or skins at once. BLAS stays single-threaded.")
+
+FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
+              _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, _OPT_THREADS)
+EXPORT_OPTIONS = (_OPT_MESH, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
+                  _OPT_GEOMETRY, _OPT_MATERIALS, _OPT_THREADS)
+
+
+def _options(options):
+    def apply(f):
+        for opt in reversed(options):
+            f = opt(f)
+        return f
+
+    return apply
 
 
 def _parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
     out: dict[str, float] = {}
     for item in items:
         key, sep, value = item.partition("=")
-        if not sep:
-            raise click.BadParameter(f"{item!r} is not KEY=VALUE", param_hint="--geometry")
+        if not sep or not key.strip():
+            _bad(f"--geometry {item!r}: expected KEY=VALUE, e.g. pocket_roof_mm=1.5")
         try:
-            out[key.strip()] = float(value)
+            number = float(value)
         except ValueError:
-            raise click.BadParameter(f"{value!r} in {item!r} is not a number",
-                                     param_hint="--geometry") from None
+            _bad(f"--geometry {item!r}: {value!r} is not a number")
+        if not math.isfinite(number):
+            _bad(f"--geometry {item!r}: {value!r} is not a finite number")
+        out[key.strip()] = number
     return out
 
 
 def _load_materials(path: str | None) -> dict[str, dict]:
     if path is None:
         return {}
+    if not str(path).strip():
+        _bad("--materials '': expected a JSON file path, got an empty string")
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise click.BadParameter(f"{path!r}: {exc}", param_hint="--materials") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        _bad(f"--materials {path!r}: cannot be read ({exc.__class__.__name__}: {exc})")
+    except json.JSONDecodeError as exc:
+        _bad(f"--materials {path!r}: not JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})")
     if not isinstance(data, dict):
-        raise click.BadParameter(f"{path!r} must hold an object keyed by material name",
-                                 param_hint="--materials")
+        _bad(f"--materials {path!r}: expected an object keyed by material name (sil, pu), "
+             f"got {type(data).__name__}")
     return data
 
 
-def _settings(**kw: Any):
+def _designs(names) -> list[str]:
+    from softhand.fem.geometry import parse_design
+
+    out = []
+    for name in names:
+        try:
+            out.append(parse_design(name).name)
+        except ValueError as exc:
+            _bad(str(exc))
+    return out
+
+
+def _make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **kw):
+    """IndentationSettings from the FE options, every error naming its flag."""
+    from dataclasses import replace
+
+    from softhand.fem.geometry import parse_design
     from softhand.fem.solver import IndentationSettings
 
     try:
-        return IndentationSettings(**kw)
+        settings = IndentationSettings(mode=mode, **kw)
+    except ValueError as exc:  # the option types already checked each number
+        _bad(str(exc))
+    materials = _load_materials(materials_path)
+    try:
+        settings = replace(settings, materials=materials)
     except ValueError as exc:
-        _fail(exc)
+        _bad(f"--materials {materials_path!r}: {exc}")
+    geom = _parse_geometry(geometry)
+    items = " ".join(geometry)
+    try:
+        settings = replace(settings, geometry=geom)
+        for name in designs:
+            parse_design(name).geometry(**geom)
+    except ValueError as exc:
+        _bad(f"--geometry {items}: {exc}")
+    return settings
 
 
-_common_fe = [
-    click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),
-                 default="default", show_default=True,
-                 help="Mesh: default is graded to the pocket ends; fine doubles every count."),
-    click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d", show_default=True,
-                 help="3D quarter model, or fast 2D plane-strain cross-section."),
-    click.option("--elastic-only", is_flag=True, help="Hyperfoam only, no Prony relaxation."),
-    click.option("--moduli", type=click.Choice(["long-term", "instantaneous"]),
-                 default="long-term", show_default=True,
-                 help="How Table 3 moduli are read."),
-    click.option("--hold", "hold_s", type=float, default=10.0, show_default=True,
-                 help="Hold after the ramp (s)."),
-    click.option("--speed", "speed_mm_s", type=float, default=0.5, show_default=True,
-                 help="Plate speed (mm/s)."),
-    click.option("--max-force", "max_force_N", type=float, default=2.0, show_default=True,
-                 help="Force that ends the ramp (N)."),
-    click.option("--geometry", multiple=True, metavar="KEY=VALUE",
-                 help="Override a geometry field, e.g. pocket_roof_mm=1.5 (repeatable)."),
-    click.option("--materials", "materials_path", type=click.Path(dir_okay=False),
-                 help="JSON file with material constants replacing Table 3."),
-]
-
-
-def _fe_options(f):
-    for opt in reversed(_common_fe):
-        f = opt(f)
-    return f
-
-
-def _make_settings(mesh, mode, elastic_only, moduli, hold_s, speed_mm_s, max_force_N,
-                   geometry, materials_path):
-    return _settings(mesh=mesh, mode=mode, elastic_only=elastic_only, moduli=moduli,
-                     hold_s=hold_s, speed_mm_s=speed_mm_s, max_force_N=max_force_N,
-                     geometry=_parse_geometry(geometry), materials=_load_materials(materials_path))
-
-
-@click.group()
+@click.group(cls=_Softhand)
 @click.version_option(__version__, prog_name="softhand")
 def main() -> None:
     """softhand: lifelike prosthetic skins, from FE indentation to MuJoCo."""
@@ -116,36 +300,31 @@ def fe() -> None:
 
 @fe.command("indent")
 @click.argument("design")
-@_fe_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False),
-              help="Write the curve CSV and summary JSON here.")
+@_options(FE_OPTIONS)
+@click.option("--out", "out_dir", help="Write the curve CSV and summary JSON into this folder.")
+@click.option("--force", is_flag=True, help="Allow --out inside the shipped calibration/.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def fe_indent(design, out_dir, as_json, **kw) -> None:
+def fe_indent(design, out_dir, force, as_json, **kw) -> None:
     """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate."""
-    from tqdm import tqdm
-
-    from softhand.fem.geometry import parse_design
-    from softhand.fem.solver import ConvergenceError, indent
+    from softhand.fem.solver import ConvergenceError, Status, indent
     from softhand.fem.sweep import write_results
 
+    (name,) = _designs([design])
+    settings = _make_settings([name], **kw)
+    out = _checked_dir(out_dir, "--out")
+    if out is not None:
+        _guard_shipped(out, complete=False, force=force, what=f"one design ({name})")
     try:
-        design = parse_design(design).name
-    except ValueError as exc:
-        _fail(exc)
-    settings = _make_settings(**kw)
-    with tqdm(total=100, desc=design, unit="%", disable=as_json, file=sys.stderr) as bar:
-        def progress(frac: float) -> None:
-            bar.update(round(100 * frac) - bar.n)
-
-        try:
-            result = indent(design, settings, progress=progress)
-        except ValueError as exc:
-            _fail(exc)
-        except ConvergenceError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(3)
-    if out_dir:
-        write_results({design: result}, out_dir, plot=False)
+        with _progress(name, disable=as_json) as progress:
+            result = indent(name, settings, progress=progress)
+    except ConvergenceError as exc:
+        raise Stopped(f"error: {exc}", EXIT_CONVERGENCE) from None
+    if out is not None:
+        write_results({name: result}, out, plot=False)
+    if result.status is Status.REACHED_DEPTH:
+        click.echo(f"warning: the ramp stopped at --max-depth {settings.max_depth_mm:g} mm with "
+                   f"{result.force_N[~result.hold][-1]:.3f} N, before --max-force "
+                   f"{settings.max_force_N:g} N", err=True)
     summary = result.summary()
     if as_json:
         click.echo(json.dumps(summary))
@@ -171,53 +350,86 @@ def _print_result(s: dict[str, Any]) -> None:
                f"{s['newton_iterations']} Newton iterations, {s['wall_s']:.1f} s")
 
 
-@fe.command("sweep")
-@_fe_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=str(DEFAULT_FE_DIR),
-              show_default=True, help="Folder for curves, summary.json and curves.png.")
-@click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
-@click.option("--jobs", type=click.IntRange(min=1), default=None,
-              help="Designs run at once, one process each [default: CPU count].")
-def fe_sweep(out_dir, designs, jobs, **kw) -> None:
-    """Indent all 12 designs and compare them with the paper."""
-    from softhand.fem.geometry import DESIGNS, parse_design
-    from softhand.fem.solver import ConvergenceError
-    from softhand.fem.sweep import paper_error_table, run_sweep, write_results
+def _shipped_settings_differ(out: Path, settings) -> list[str]:
+    """Settings of ``settings`` that differ from those the folder's summary.json records."""
+    from dataclasses import asdict
 
-    settings = _make_settings(**kw)
+    path = out / "summary.json"
     try:
-        names = [parse_design(d).name for d in (designs or DESIGNS)]
-        for n in names:
-            parse_design(n).geometry(**settings.geometry)
-    except ValueError as exc:
-        _fail(exc)
-    try:
-        results = run_sweep(names, settings, jobs=jobs)
-    except ConvergenceError as exc:
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(3)
-    summary = write_results(results, out_dir)
-    click.echo(paper_error_table(summary))
-    click.echo(f"wrote {len(results)} curves, summary.json and curves.png to {out_dir} "
+        old = json.loads(path.read_text(encoding="utf-8"))["provenance"]["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return []
+    new = json.loads(json.dumps(asdict(settings)))
+    return sorted(k for k in new if k != "threads" and k in old and old[k] != new[k])
+
+
+@fe.command("sweep")
+@_options(FE_OPTIONS)
+@click.option("--out", "out_dir", default=str(FE_DIR), show_default=True,
+              help="Folder for curves, summary.json and curves.png.")
+@click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
+@click.option("--force", is_flag=True,
+              help="Allow writing a subset, or other settings, into the shipped calibration/.")
+def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
+    """Indent all 12 designs and compare them with the paper."""
+    from softhand.fem.geometry import DESIGNS
+    from softhand.fem.sweep import paper_error_table, run_sweep, write_results
+    from softhand.io import interrupts_deferred
+
+    names = _designs(dict.fromkeys(designs or DESIGNS))
+    settings = _make_settings(names, threads=None, **kw)
+    out = _checked_dir(out_dir, "--out")
+    _guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
+                   what=f"{len(names)} of the 12 designs")
+    if is_shipped(out) and not force and (diff := _shipped_settings_differ(out, settings)):
+        _bad(f"--out {str(out)!r} is shipped calibration data made with other settings "
+             f"({', '.join(diff)}); write elsewhere with --out DIR, or add --force")
+    batch = run_sweep(names, settings, threads=threads)
+    missing = {n: "interrupted" for n in batch.missing}
+    missing.update({n: str(e) for n, e in batch.errors.items()})
+    if batch.results:
+        with interrupts_deferred():
+            summary = write_results(batch.results, out, missing=missing,
+                                    plot=not batch.interrupted)  # stop fast: no plot
+        click.echo(paper_error_table(summary))
+    where = f"{len(batch.results)} of {len(names)} designs to {out}"
+    if batch.interrupted:
+        raise Stopped(f"interrupted (Ctrl-C): wrote {where}; missing: "
+                      f"{', '.join(missing) or '-'}", EXIT_INTERRUPTED)
+    if batch.errors:
+        raise Stopped(f"error: {len(batch.errors)} design(s) did not converge "
+                      f"({'; '.join(f'{n}: {e}' for n, e in batch.errors.items())}); "
+                      f"wrote {where}", EXIT_CONVERGENCE)
+    click.echo(f"wrote {len(batch.results)} curves, summary.json and curves.png to {out} "
                f"({summary['total_wall_s']:.0f} s of FE)")
 
 
 @fe.command("export")
 @click.argument("design")
-@click.argument("out", type=click.Path(dir_okay=False))
-@click.option("--format", "fmt", type=click.Choice(["inp"]), default="inp", show_default=True,
-              help="Abaqus input deck.")
-@_fe_options
-def fe_export(design, out, fmt, **kw) -> None:
-    """Write DESIGN as an Abaqus-format input deck to OUT."""
-    from softhand.fem.abaqus import write_inp
+@click.argument("out")
+@click.option("--format", "fmt", type=click.Choice(["inp", "ccx"]), default="inp",
+              show_default=True,
+              help="inp: Abaqus/Standard (hyperfoam + Prony); ccx: CalculiX 2.20 (hyperfoam "
+                   "only: CalculiX has no Prony viscoelasticity for it).")
+@click.option("--depth", "depth_mm", type=Number(0, 7, lo_open=True, unit="mm"), default=None,
+              help="Plate travel of the ramp, (0, 7] mm [default: the travel at which softhand's "
+                   "own run of this model reaches --max-force, found by running it].")
+@_options(EXPORT_OPTIONS)
+def fe_export(design, out, fmt, depth_mm, **kw) -> None:
+    """Write DESIGN as an Abaqus (.inp) or CalculiX (.inp) input deck to OUT."""
+    from softhand.fem.abaqus import write_deck
 
-    settings = _make_settings(**kw)
-    try:
-        path = write_inp(design, out, settings)
-    except ValueError as exc:
-        _fail(exc)
-    click.echo(f"wrote {path}")
+    (name,) = _designs([design])
+    settings = _make_settings([name], **kw)
+    path = _checked_file(out, "OUT", ".inp")
+    with _progress(f"{name}: plate travel", disable=depth_mm is not None) as progress:
+        try:
+            info = write_deck(name, path, settings, fmt=fmt, depth_mm=depth_mm,
+                              progress=progress)
+        except ValueError as exc:
+            _bad(str(exc))
+    click.echo(f"wrote {info.path} ({fmt}, plate travel {info.depth_mm:.4g} mm: "
+               f"{info.depth_source})")
 
 
 @main.command("calibrate")
@@ -225,47 +437,67 @@ def fe_export(design, out, fmt, **kw) -> None:
 @click.option("--representation", "representations", multiple=True,
               help="rigid, soft-contact, soft-contact+relaxation or flex (repeatable) "
                    "[default: all four].")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
-              help="Folder for the calibration files [default: calibration/skins].")
-@click.option("--fe-dir", type=click.Path(file_okay=False), default=None,
-              help="Folder with the FE curves [default: calibration/fe].")
-@click.option("--jobs", type=click.IntRange(min=1), default=None,
-              help="Skins calibrated at once, one process each [default: CPU count].")
+@click.option("--out", "out_dir", default=str(SKINS_DIR), show_default=True,
+              help="Folder for the calibration files.")
+@click.option("--fe-dir", default=str(FE_DIR), show_default=True,
+              help="Folder with the FE curves (as written by `softhand fe sweep`).")
+@_options((_OPT_THREADS,))
+@click.option("--force", is_flag=True,
+              help="Allow writing a subset of skins or representations into the shipped "
+                   "calibration/.")
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
-def calibrate(skins, representations, out_dir, fe_dir, jobs, as_json) -> None:
+def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) -> None:
     """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
-    from softhand.skin.calibrate import skin_names
+    from softhand.io import interrupts_deferred
+    from softhand.skin.calibrate import fe_curves, skin_names
     from softhand.skin.rig import REPRESENTATIONS
     from softhand.skin.run import calibrate_many, summary_table
 
-    names = list(skins) or skin_names()
+    known = skin_names()
+    names = list(dict.fromkeys(skins)) or known
     for n in names:
-        if n not in skin_names():
-            _fail(ValueError(f"skin {n!r} is unknown; allowed: {', '.join(skin_names())}"))
-    reps = tuple(representations) or REPRESENTATIONS
+        if n not in known:
+            _bad(f"skin {n!r} is unknown; allowed: {', '.join(known)}")
+    reps = tuple(dict.fromkeys(representations)) or REPRESENTATIONS
     for r in reps:
         if r not in REPRESENTATIONS:
-            _fail(ValueError(f"representation {r!r} is unknown; allowed: "
-                             f"{', '.join(REPRESENTATIONS)}"))
-    try:
-        result = calibrate_many(names, reps, out_dir=out_dir, fe_dir=fe_dir, jobs=jobs,
-                                show_progress=not as_json)
-    except (FileNotFoundError, ValueError) as exc:
-        click.echo(f"error: {exc}", err=True)
-        sys.exit(3)
-    if as_json:
-        click.echo(json.dumps(result, indent=1))
-    else:
-        click.echo(summary_table(result))
+            _bad(f"--representation {r!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
+    out = _checked_dir(out_dir, "--out")
+    _guard_shipped(out, complete=set(names) == set(known) and set(reps) == set(REPRESENTATIONS),
+                   force=force, what=f"{len(names)} of {len(known)} skins and "
+                                     f"{len(reps)} of {len(REPRESENTATIONS)} representations")
+    if not str(fe_dir).strip():
+        _bad("--fe-dir '': expected a folder path, got an empty string")
+    from softhand.fem.geometry import DESIGNS
+
+    for n in names:  # every FE curve is read and checked before the first fit
+        if n in DESIGNS:
+            try:
+                fe_curves(n, fe_dir)
+            except (FileNotFoundError, ValueError) as exc:
+                _bad(f"--fe-dir {fe_dir!r}: {exc}")
+    run = calibrate_many(names, reps, out_dir=out, fe_dir=fe_dir, threads=threads,
+                         show_progress=not as_json)
+    if run.index is not None:
+        with interrupts_deferred():
+            text = json.dumps(run.index, indent=1) if as_json else summary_table(run.index)
+        click.echo(text)
+    where = f"wrote {len(run.written)} of {len(names)} skins to {out}"
+    if run.interrupted:
+        raise Stopped(f"interrupted (Ctrl-C): {where}; missing: "
+                      f"{', '.join(n for n in run.missing)}", EXIT_INTERRUPTED)
+    if run.missing:
+        raise Stopped(f"error: {len(run.missing)} skin(s) failed "
+                      f"({'; '.join(f'{n}: {e}' for n, e in run.missing.items())}); {where}",
+                      EXIT_CONVERGENCE)
 
 
 def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
     out: dict[str, str] = {}
     for item in items:
         region, sep, design = item.partition("=")
-        if not sep or not region or not design:
-            raise click.BadParameter(f"{item!r} is not REGION=DESIGN (e.g. Palm1=pocket2-sil)",
-                                     param_hint="--skin")
+        if not sep or not region.strip() or not design.strip():
+            _bad(f"--skin {item!r}: expected REGION=DESIGN (e.g. Palm1=pocket2-sil)")
         out[region.strip()] = design.strip()
     return out
 
@@ -277,34 +509,36 @@ def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
 @click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
               default="neutral", show_default=True,
               help="Controller of the prosthetic hand (neutral: the paper's sensored hand).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the partner.")
-@click.option("--timestep", "timestep_s", type=click.FloatRange(0.0, 0.01, min_open=True),
-              default=0.002, show_default=True,
-              help="Physics timestep (s); skins are calibrated for 0.0005-0.002. Actions stay "
-                   "at 100 Hz.")
-@click.option("--record", "record_path", type=click.Path(dir_okay=False), default=None,
-              help="Write a rerun recording (.rrd) here.")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
+              help="Seed of the partner, 0 <= seed < 2^32.")
+@click.option("--timestep", "timestep_s", type=Number(1e-4, 5e-3, unit="s"), default=0.002,
+              show_default=True,
+              help="Physics timestep, 0.0001-0.005 s (skins calibrated and tested at "
+                   "0.0005-0.002 s). Actions stay at 100 Hz.")
+@click.option("--record", "record_path", default=None,
+              help="Write a rerun recording here (a .rrd file; a missing folder is created).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_json) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
+    from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
     from softhand.envs.skins import parse_skins
 
-    if not math.isfinite(timestep_s):  # FloatRange lets nan through
-        raise click.BadParameter(f"{timestep_s} is not in the range 0.0<x<=0.01",
-                                 param_hint="'--timestep'")
+    if design is not None and not design.strip():
+        _bad("--design '': expected a skin name, e.g. pocket2-sil")
     overrides = _parse_skin_overrides(skin_items)
-    try:
+    record = _checked_file(record_path, "--record", ".rrd")
+    try:  # skins and their calibration files, before the episode
         parse_skins(design, overrides)
-        run = run_handshake(design=design, skins=overrides, controller=controller, seed=seed,
-                            timestep_s=timestep_s)
+        env = HandshakeEnv(design=design, skins=overrides, timestep_s=timestep_s)
     except ValueError as exc:
-        _fail(exc)
-    if record_path:
+        _bad(str(exc))
+    run = run_handshake(controller=controller, seed=seed, env=env)
+    if record is not None:
         from softhand.viz import record_handshake
         from softhand.viz.bench import frames_of
 
-        record_handshake(record_path, run.model, frames_of(run))
+        record_handshake(record, run.model, frames_of(run))
     summary = run.summary()
     if as_json:
         click.echo(json.dumps(summary, indent=1))
@@ -321,7 +555,7 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
                f"only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
     click.echo(f"bone on bone (no skin between): peak {summary['rigid_contact_peak_N']:.1f} N")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
-               + (f"; recording: {record_path}" if record_path else ""))
+               + (f"; recording: {record}" if record else ""))
 
 
 @main.group()
@@ -329,43 +563,44 @@ def bench() -> None:
     """Benchmarks: speed against error, written to a report (never run as tests)."""
 
 
+_OPT_REPORTS = click.option("--out", "out_dir", default=str(REPORTS_DIR), show_default=True,
+                            help="Folder for the report files.")
+
+
 @bench.command("fe")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False),
-              default="reports", show_default=True, help="Folder for bench-fe.md/json.")
+@_OPT_REPORTS
 @click.option("--quick", is_flag=True, help="Skip the fine-mesh reference runs.")
 def bench_fe(out_dir, quick) -> None:
-    """Time one 3D design, the 12-design sweep and the 2D mode; errors against the fine mesh."""
+    """Time one 3D design (idle and next to CPU load), the sweeps and 2D; errors vs fine mesh."""
     from softhand.fem.bench import run_fe_benchmark
 
-    report = run_fe_benchmark(out_dir, quick=quick)
-    click.echo(report)
+    click.echo(run_fe_benchmark(_checked_dir(out_dir, "--out"), quick=quick))
 
 
 @bench.command("handshake")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False),
-              default="reports", show_default=True, help="Folder for bench-handshake.md/json.")
+@_OPT_REPORTS
 def bench_handshake(out_dir) -> None:
     """Handshake speed (recording off/on, 0.5-2 ms) and the skins side by side."""
     from softhand.viz.bench import run_handshake_benchmark
 
-    click.echo(run_handshake_benchmark(out_dir))
+    click.echo(run_handshake_benchmark(_checked_dir(out_dir, "--out")))
 
 
 @bench.command("calibration")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False),
-              default="reports", show_default=True,
-              help="Folder for bench-calibration.md/json/png.")
+@_OPT_REPORTS
 @click.option("--skin", "skins", multiple=True, help="Skins to measure (repeatable) "
               "[default: every shipped skin].")
 def bench_calibration(out_dir, skins) -> None:
     """Each representation's error against FE and cost per step relative to rigid, one run."""
     from softhand.skin.bench import run_calibration_benchmark
+    from softhand.skin.files import shipped_skins
 
-    try:
-        report = run_calibration_benchmark(out_dir, skins=list(skins) or None)
-    except ValueError as exc:
-        _fail(exc)
-    click.echo(report)
+    out = _checked_dir(out_dir, "--out")
+    known = shipped_skins()
+    for s in skins:
+        if s not in known:
+            _bad(f"--skin {s!r} has no shipped calibration; allowed: {', '.join(known)}")
+    click.echo(run_calibration_benchmark(out, skins=list(dict.fromkeys(skins)) or None))
 
 
 if __name__ == "__main__":  # pragma: no cover

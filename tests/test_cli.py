@@ -64,7 +64,7 @@ def _materials(tmp_path, constants):
     (["--geometry", "pocket_height_mm=7"], "pocket_height_mm = 7.0"),
     (["--geometry", "outer_layer_mm=9"], "outer_layer_mm = 9.0"),
     (["--geometry", "nonsense=1"], "nonsense"),
-    (["--speed", "-1"], "speed_mm_s = -1.0"),
+    (["--speed", "-1"], "'--speed': '-1' is outside the allowed range 0 < x <= 100 mm/s"),
 ])
 def test_bad_geometry_or_settings_names_the_value_and_writes_nothing(tmp_path, extra, needle):
     """Exit status 2, the bad value in the message, no output folder."""
@@ -105,7 +105,7 @@ def test_unknown_design_lists_the_allowed_names(tmp_path):
 def test_calibrate_json_reports_the_contract_metrics_and_writes_files(tmp_path):
     """calibrate --json: per skin and representation the four error numbers; files + index."""
     res = run(["calibrate", "prosthetic-102l", "--representation", "soft-contact",
-               "--representation", "rigid", "--out", str(tmp_path), "--jobs", "1", "--json"])
+               "--representation", "rigid", "--out", str(tmp_path), "--threads", "1", "--json"])
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     soft = data["skins"]["prosthetic-102l"]["soft-contact"]
@@ -145,11 +145,13 @@ def test_handshake_json_and_recording(tmp_path):
 
 
 @pytest.mark.parametrize("args, needle", [
-    (["handshake", "--skin", "Palm1"], "is not REGION=DESIGN"),
+    (["handshake", "--skin", "Palm1"], "--skin 'Palm1': expected REGION=DESIGN"),
     (["handshake", "--skin", "Pinky9=rigid"], "region 'Pinky9' is unknown"),
     (["handshake", "--design", "jelly"], "skin design 'jelly' is unknown"),
-    (["handshake", "--timestep", "0.05"], "0.05 is not in the range 0.0<x<=0.01"),
-    (["handshake", "--timestep", "nan"], "nan is not in the range 0.0<x<=0.01"),
+    (["handshake", "--timestep", "0.05"],
+     "'--timestep': '0.05' is outside the allowed range 0.0001 <= x <= 0.005 s"),
+    (["handshake", "--timestep", "nan"],
+     "'--timestep': 'nan' is outside the allowed range 0.0001 <= x <= 0.005 s"),
 ])
 def test_handshake_bad_input_names_the_value(args, needle):
     res = CliRunner().invoke(main, args)

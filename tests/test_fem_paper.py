@@ -15,6 +15,9 @@ from softhand.fem.solver import IndentationSettings, indent
 from softhand.paper import paper
 
 
+pytestmark = pytest.mark.slow  # the 12-design 3D fixture: about a minute idle, more under load
+
+
 @pytest.fixture(scope="module")
 def results_3d():
     settings = IndentationSettings(hold_s=0.0)

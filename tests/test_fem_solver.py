@@ -48,6 +48,7 @@ def test_long_pu_hold_reaches_the_long_term_elastic_state():
     assert r.force_N[-1] < 0.75 * r.force_N[~r.hold][-1]
 
 
+@pytest.mark.slow
 def test_pocket_closes_under_20_newton_without_failure():
     """pocket2-sil to 20 N: reaches the force, pocket contact closed, stiffening after closure."""
     r = indent("pocket2-sil", IndentationSettings(max_force_N=20.0, hold_s=1.0, **S2D))
@@ -78,6 +79,7 @@ def test_alpha_to_zero_is_continuous_in_the_structure():
     assert tiny.displacement_at(2.0) == pytest.approx(base.displacement_at(2.0), rel=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["solid-sil", "pocket2-sil"])
 def test_2d_default_mesh_converges_within_one_percent(design):
     """2D: d(2 N) changes < 1 % from the default mesh to the fine mesh (every count doubled)."""
@@ -86,6 +88,7 @@ def test_2d_default_mesh_converges_within_one_percent(design):
     assert abs(d[0] - d[1]) / d[1] < 0.01
 
 
+@pytest.mark.slow
 def test_2d_uniform_mesh_converges_slowly_near_the_closed_pocket():
     """2D pocket2-sil on uniform meshes: O(h^p) with p < 1.5 (crack-like pocket ends).
 

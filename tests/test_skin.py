@@ -63,6 +63,7 @@ def test_soft_contact_fit_recovers_known_parameters():
     np.testing.assert_allclose(fit.solimp, KNOWN.solimp, rtol=0.02)
 
 
+@pytest.mark.slow
 def test_soft_contact_fits_every_fe_loading_curve_within_1_5_percent():
     worst = 0.0
     for path in sorted(FE.glob("*.csv")):
@@ -135,6 +136,7 @@ def test_relaxation_pad_reproduces_a_known_qlv_law_in_the_rig():
     assert 100 * np.abs(err[hold]).max() / f[199] < 2.0
 
 
+@pytest.mark.slow
 def test_calibrate_design_meets_the_issue_targets_on_a_pocket_design(pocket_pu):
     cal = calibrate_design("pocket2-pu", fe_dir=FE,
                            representations=("soft-contact", "soft-contact+relaxation"))

@@ -85,6 +85,7 @@ def test_force_starts_at_zero_and_rises():
     assert c.max_penetration_mm < 0.02  # contact stays near-rigid (measured 0.013 mm at 1.28 N)
 
 
+@pytest.mark.slow
 def test_fit_recovers_a_known_young_from_three_times_off():
     base = FlexPadParams(young_Pa=0.4e6, **COARSE)
     truth = simulate_flex_indentation(base, depth_mm=0.45)
@@ -95,6 +96,7 @@ def test_fit_recovers_a_known_young_from_three_times_off():
     assert fit.n_simulations < 40
 
 
+@pytest.mark.slow
 def test_fit_to_solid_pu_fe_ramp():
     delta, force = _ramp("solid-pu")
     fit = fit_flex(delta, force, young_guess_Pa=2e6)

@@ -138,10 +138,15 @@ class ContactAreas:
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
                   controller: str = "neutral", seed: int = 0, record_every: int | None = None,
-                  **env_kwargs) -> HandshakeRun:
+                  env: HandshakeEnv | None = None, **env_kwargs) -> HandshakeRun:
     """Run one episode; keep every ``record_every``-th physics step for the recording (default:
-    the last step of every action, 100 Hz)."""
-    env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
+    the last step of every action, 100 Hz).
+
+    ``env`` is an environment built already (then ``design``, ``skins`` and ``env_kwargs`` are
+    not used): the CLI builds it first, so that every input is checked before the episode.
+    """
+    if env is None:
+        env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
     ctrl = make_controller(controller)
     record_every = record_every or env.frame_skip
     obs, info = env.reset(seed=seed)

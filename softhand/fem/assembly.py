@@ -15,7 +15,6 @@ The sparse pattern is computed once; each assembly scatters element matrices wit
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from itertools import pairwise
@@ -25,6 +24,7 @@ import scipy.sparse as sp
 
 from softhand.fem.materials import Material, ViscoState, voigt_to_tensor
 from softhand.fem.mesh import Mesh
+from softhand.parallel import check_threads
 
 __all__ = ["Assembler", "ElementState"]
 
@@ -52,14 +52,13 @@ class Assembler:
         mesh: the mesh.
         materials: one material per layer id (index 0: inner part, 1: outer layer).
         threads: element blocks evaluated at once (NumPy releases the GIL in the batched
-            kernels, so 2 threads on 2 cores take about 0.6x the time); default: CPU count, at most 4.
+            kernels, so 2 threads on 2 cores take about 0.6x the time); default:
+            :func:`softhand.parallel.default_threads`. The caller keeps BLAS single-threaded
+            (:func:`softhand.parallel.single_threaded_blas`): these threads own the cores.
     """
 
     def __init__(self, mesh: Mesh, materials: list[Material], threads: int | None = None) -> None:
-        if threads is None:
-            threads = min(4, os.cpu_count() or 1)
-        if threads < 1:
-            raise ValueError(f"threads = {threads!r} must be >= 1")
+        threads = check_threads(threads)
         self.threads = threads
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
         self.mesh = mesh
@@ -85,6 +84,12 @@ class Assembler:
         self._nnz = keys.size
         self.groups = [np.flatnonzero(mesh.layer == k) for k in range(len(materials))]
         self.n_qp = ref.weights.size
+
+    def close(self) -> None:
+        """Stop the element threads (the assembler stays usable, single-threaded)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
 
     def initial_state(self) -> ElementState:
         return ElementState([

@@ -3,6 +3,10 @@
 Measures, in one process on this machine:
 
 * one 3D design to 2 N at the default mesh (ramp only), and the same with the 10 s hold;
+* the same ramp with every core of the machine busy with other work (an external CPU load of one
+  busy process per core, started and stopped by the benchmark), at the default ``--threads`` and
+  at one thread: the slow-down should be about the fair share (2x with as many busy processes as
+  cores), not the 6-10x that competing BLAS and element threads gave;
 * the full 12-design sweep at the default settings (3D, default mesh, ramp + hold);
 * the reduced 2D plane-strain mode for all 12 designs;
 * 3D fine-mesh references (every element count doubled) for solid-sil and pocket2-sil, and the
@@ -13,9 +17,13 @@ Timings are wall-clock seconds; they are reported, never asserted by tests.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
+import subprocess
+import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +31,8 @@ from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import IndentationSettings, indent
 from softhand.fem.sweep import compare_with_paper, git_revision, run_sweep
 from softhand.io import atomic_write_json, atomic_write_text
+from softhand.parallel import available_cpus, default_threads
+from softhand.paths import REPORTS_DIR
 
 __all__ = ["run_fe_benchmark"]
 
@@ -33,23 +43,62 @@ def _pct(a: float | None, b: float | None) -> float | None:
     return None if a is None or b is None else 100.0 * (a - b) / b
 
 
-def run_fe_benchmark(out_dir: str | Path = "reports", *, quick: bool = False) -> str:
+@contextlib.contextmanager
+def cpu_load(n: int) -> Iterator[None]:
+    """``n`` busy processes (pure Python loops) for the duration of the block; always stopped."""
+    code = "while True:\n    pass"
+    procs = [subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
+                              start_new_session=True) for _ in range(n)]
+    try:
+        time.sleep(0.5)  # let them start spinning before the timed run
+        yield
+    finally:
+        for p in procs:
+            p.kill()
+        for p in procs:
+            p.wait()
+
+
+def _complete(outcome) -> dict:
+    """The results of a sweep that must be complete inside the benchmark."""
+    if outcome.interrupted:
+        raise KeyboardInterrupt
+    if not outcome.complete:
+        raise RuntimeError(f"sweep failed: {outcome.errors}")
+    return outcome.results
+
+
+def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) -> str:
     """Run the benchmark, write ``bench-fe.json`` and ``bench-fe.md``, return the Markdown."""
     out = Path(out_dir)
     ramp = IndentationSettings(hold_s=0.0)
     data: dict[str, Any] = {"machine": {"platform": platform.platform(),
                                         "cpus": os.cpu_count(),
+                                        "available_cpus": available_cpus(),
+                                        "default_threads": default_threads(),
                                         "python": platform.python_version()},
                             "git_revision": git_revision()}
     one = indent("pocket2-sil", ramp)
     one_hold = indent("pocket2-sil", IndentationSettings())
     data["one_design"] = {"design": "pocket2-sil", "ramp_wall_s": one.wall_s,
                           "ramp_hold_wall_s": one_hold.wall_s, "n_dofs": one.n_dofs}
+    n_load = available_cpus()
+    with cpu_load(n_load):
+        loaded = indent("pocket2-sil", ramp)
+        loaded_1 = indent("pocket2-sil", IndentationSettings(hold_s=0.0, threads=1))
+    idle_1 = indent("pocket2-sil", IndentationSettings(hold_s=0.0, threads=1))
+    data["under_load"] = {
+        "design": "pocket2-sil", "busy_processes": n_load,
+        "default_threads": {"threads": default_threads(), "idle_s": one.wall_s,
+                            "loaded_s": loaded.wall_s, "ratio": loaded.wall_s / one.wall_s},
+        "one_thread": {"threads": 1, "idle_s": idle_1.wall_s, "loaded_s": loaded_1.wall_s,
+                       "ratio": loaded_1.wall_s / idle_1.wall_s},
+    }
     t0 = time.perf_counter()
-    sweep = run_sweep(DESIGNS, IndentationSettings(), show_progress=True)
+    sweep = _complete(run_sweep(DESIGNS, IndentationSettings(), show_progress=True))
     sweep_wall = time.perf_counter() - t0
     t0 = time.perf_counter()
-    sweep2d = run_sweep(DESIGNS, IndentationSettings(mode="2d"), show_progress=True)
+    sweep2d = _complete(run_sweep(DESIGNS, IndentationSettings(mode="2d"), show_progress=True))
     sweep2d_wall = time.perf_counter() - t0
     s3 = {n: r.summary() for n, r in sweep.items()}
     s2 = {n: r.summary() for n, r in sweep2d.items()}
@@ -100,6 +149,7 @@ def _markdown(d: dict[str, Any]) -> str:
         f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",
         f"| 12-design sweep, 3D, ramp + hold | {d['sweep_3d']['wall_s']:.1f} |",
         f"| 12-design sweep, 2D plane strain, ramp + hold | {d['sweep_2d']['wall_s']:.1f} |", "",
+        *_load_lines(d), "",
         "| design | 3D d(2 N) mm | 2D d(2 N) mm | 2D vs 3D | 3D F(2 mm) N | F after hold / peak |",
         "|---|---|---|---|---|---|",
     ]
@@ -119,3 +169,17 @@ def _markdown(d: dict[str, Any]) -> str:
                 lines.append(f"| {n} | {label} | {r['n_dofs']} | {f(r['d2N'])} | "
                              f"{f(r['error_vs_fine_pct'], '+.2f')} % | {r['wall_s']:.1f} |")
     return "\n".join(lines) + "\n"
+
+
+def _load_lines(d: dict[str, Any]) -> list[str]:
+    u = d.get("under_load")
+    if not u:
+        return []
+    lines = [f"The same ramp (pocket2-sil to 2 N) idle and with {u['busy_processes']} busy "
+             "processes beside it (one per available CPU; a fair share is about 2x):", "",
+             "| threads | idle (s) | loaded (s) | loaded / idle |", "|---|---|---|---|"]
+    for key in ("default_threads", "one_thread"):
+        r = u[key]
+        lines.append(f"| {r['threads']}{' (default)' if key == 'default_threads' else ''} | "
+                     f"{r['idle_s']:.1f} | {r['loaded_s']:.1f} | {r['ratio']:.2f} |")
+    return lines

@@ -25,6 +25,7 @@ from softhand.fem.contact import GapSet, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
 from softhand.fem.materials import Material, Moduli, material
 from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh
+from softhand.parallel import check_threads, single_threaded_blas
 
 __all__ = [
     "ConvergenceError",
@@ -83,8 +84,9 @@ class IndentationSettings:
             pocket2-sil's d(2 N) by 1e-5 relative and F(2 mm) by 3e-4 against 4e-7 N + 1e-6 F,
             and saves a quarter of the Newton iterations.
         tol_rel: relative part of the Newton tolerance, >= 0.
-        threads: threads for element evaluation (None: CPU count, at most 4); does not change
-            the result.
+        threads: threads for element evaluation (None: :func:`softhand.parallel.default_threads`,
+            the CPUs this process may use, at most 4); BLAS stays single-threaded during the run,
+            so these threads are the run's only parallelism. Does not change the result.
         geometry: overrides of :class:`PhalanxGeometry` fields.
         materials: per material name (``sil``, ``pu``), constants replacing Table 3 (keys
             ``nu``, ``mu_MPa``, ``alpha``, ``g``, ``tau_s``).
@@ -122,15 +124,16 @@ class IndentationSettings:
                 raise ValueError(f"{name} = {v!r} must be finite and > 0")
         if not np.isfinite(self.hold_s) or self.hold_s < 0:
             raise ValueError(f"hold_s = {self.hold_s!r} must be finite and >= 0")
-        if self.threads is not None and (int(self.threads) != self.threads or self.threads < 1):
-            raise ValueError(f"threads = {self.threads!r} must be an integer >= 1")
+        if self.threads is not None:
+            check_threads(self.threads)
         if not np.isfinite(self.tol_rel) or self.tol_rel < 0:
             raise ValueError(f"tol_rel = {self.tol_rel!r} must be finite and >= 0")
         if self.force_step_N is not None and not self.force_step_N > 0:
             raise ValueError(f"force_step_N = {self.force_step_N!r} must be > 0")
-        for name in self.materials:
+        for name in self.materials:  # every constant, Prony terms too, even if elastic_only
             try:
-                _material(name, self)
+                material(name, moduli=self.moduli, elastic_only=False,
+                         constants=self.materials.get(name))
             except ValueError as exc:
                 raise ValueError(f"materials[{name!r}]: {exc}") from None
         unknown = set(self.geometry) - set(PhalanxGeometry.__dataclass_fields__)
@@ -333,7 +336,17 @@ def indent(
     design = parse_design(design) if isinstance(design, str) else design
     s = settings or IndentationSettings()
     geom = design.geometry(**s.geometry)
-    model = _Model(design, geom, s)
+    with single_threaded_blas():  # the element threads own the cores (softhand.parallel)
+        model = _Model(design, geom, s)
+        try:
+            return _run(design, s, model, t_start, progress)
+        finally:
+            model.asm.close()
+
+
+def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
+         progress: Callable[[float], None] | None) -> IndentationResult:
+    """The ramp and the hold of :func:`indent` on a built model."""
     do_hold = s.hold_s > 0 and not s.elastic_only
     f_step = s.force_step_N or s.max_force_N / 12.0
     tol = lambda F: (s.tol_N + s.tol_rel * abs(F)) / model.scale  # noqa: E731  (modelled part)

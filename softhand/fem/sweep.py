@@ -12,11 +12,8 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
-import multiprocessing
-import os
 import subprocess
 from collections.abc import Iterable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, replace
 from datetime import datetime, timezone
 from pathlib import Path
@@ -29,6 +26,7 @@ from softhand.fem.geometry import DESIGNS, parse_design
 from softhand.fem.solver import SOLVER_VERSION, IndentationResult, IndentationSettings, indent
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.paper import paper
+from softhand.parallel import BatchOutcome, check_threads, run_tasks
 
 __all__ = ["compare_with_paper", "curve_csv", "git_revision", "run_sweep", "write_results"]
 
@@ -97,52 +95,57 @@ def compare_with_paper(summaries: dict[str, dict[str, Any]]) -> dict[str, Any]:
 
 
 def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | None = None,
-              *, show_progress: bool = True, jobs: int | None = None) -> dict[str, IndentationResult]:
+              *, show_progress: bool = True, threads: int | None = None) -> BatchOutcome:
     """Indent every design with the same settings; a progress bar counts designs.
 
     Args:
-        jobs: designs run at once in separate processes, each single-threaded (None: CPU
-            count). The results do not depend on it; results come back in ``designs`` order.
+        threads: cores to use (None: :func:`softhand.parallel.default_threads`): that many
+            designs at once, one single-threaded worker process each; for a single design (or
+            ``threads=1``) it runs in this process with ``threads`` element threads. The results
+            do not depend on it.
+
+    Returns:
+        The batch outcome: finished results in ``designs`` order, failed designs (their
+        :class:`ConvergenceError` text) and, after Ctrl-C, the designs that did not finish.
     """
     from tqdm import tqdm
 
     designs = [parse_design(d).name for d in designs]  # validate all names first
     settings = settings or IndentationSettings()
-    jobs = min(len(designs), jobs or os.cpu_count() or 1)
-    if jobs < 1:
-        raise ValueError(f"jobs = {jobs!r} must be >= 1")
+    jobs = min(len(designs), check_threads(threads))
     bar = tqdm(total=len(designs), desc="fe sweep", unit="design", disable=not show_progress)
-    results: dict[str, IndentationResult] = {}
-    if jobs == 1:
-        for name in designs:
-            bar.set_postfix_str(name)
-            results[name] = indent(name, settings)
-            bar.update()
-    else:
-        one = replace(settings, threads=1)
-        # slowest first (pocket designs take longest) so that the workers finish together
-        order = sorted(designs, key=lambda n: parse_design(n).topology != "pocket2")
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"),
-                                 initializer=_single_threaded) as pool:
-            futures = {pool.submit(indent, name, one): name for name in order}
-            for fut in as_completed(futures):
-                results[futures[fut]] = replace(fut.result(), settings=settings)
-                bar.set_postfix_str(futures[fut])
-                bar.update()
-    bar.close()
-    return {name: results[name] for name in designs}
 
+    def done(name, ok: bool) -> None:
+        bar.set_postfix_str(name if ok else f"{name} failed")
+        bar.update()
 
-def _single_threaded() -> None:
-    """Worker start-up: one BLAS thread, so that workers do not compete for the cores."""
-    from threadpoolctl import threadpool_limits
-
-    threadpool_limits(1)
+    # one design at a time: its element threads use the cores; else one thread per design
+    each = replace(settings, threads=check_threads(threads) if jobs == 1 else 1)
+    # slowest first (pocket designs take longest) so that the workers finish together
+    order = sorted(designs, key=lambda n: parse_design(n).topology != "pocket2")
+    tasks = [(name, (name, each)) for name in order]
+    try:
+        out = run_tasks(indent, tasks, threads=jobs, on_done=done)
+    finally:
+        bar.close()
+    results = {name: replace(out.results[name], settings=settings)
+               for name in designs if name in out.results}
+    return replace(out, results=results, missing=[n for n in designs if n in out.missing])
 
 
 def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
-                  *, plot: bool = True) -> dict[str, Any]:
-    """Write curves, the summary with provenance and the plot into ``out_dir`` (atomically)."""
+                  *, plot: bool = True, missing: dict[str, str] | None = None) -> dict[str, Any]:
+    """Write curves, the summary with provenance and the plot into ``out_dir`` (atomically).
+
+    Args:
+        results: the finished designs (at least one).
+        plot: draw ``curves.png``; when False for an incomplete set (``missing``), an older
+            ``curves.png`` is removed so that nothing in the folder disagrees with the summary.
+        missing: designs asked for that have no result, with why (interrupted, failed); the
+            summary lists them under ``missing`` and has ``complete: false``.
+    """
+    if not results:
+        raise ValueError("no finished design to write")
     out = Path(out_dir)
     summaries = {}
     hashes = {}
@@ -167,6 +170,8 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
             "curve_sha256": hashes,
             "paper": paper()["source"],
         },
+        "complete": not missing,
+        "missing": dict(missing or {}),
         "designs": summaries,
         "comparison": compare_with_paper(summaries),
         "total_wall_s": float(sum(r.wall_s for r in results.values())),
@@ -174,6 +179,8 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
     atomic_write_json(out / "summary.json", summary)
     if plot:
         plot_curves(results, out / "curves.png")
+    elif missing:  # an interrupted set: no plot that would disagree with the summary
+        (out / "curves.png").unlink(missing_ok=True)
     return summary
 
 

@@ -11,13 +11,12 @@ import json
 from pathlib import Path
 
 from softhand.io import atomic_write_json
+from softhand.paths import FE_DIR, SKINS_DIR
 from softhand.skin.calibrate import SkinCalibration
 
-__all__ = ["SHIPPED_DIR", "load_calibration", "save_calibration", "shipped_skins"]
+__all__ = ["FE_DIR", "SHIPPED_DIR", "load_calibration", "save_calibration", "shipped_skins"]
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-SHIPPED_DIR = REPO_ROOT / "calibration" / "skins"
-FE_DIR = REPO_ROOT / "calibration" / "fe"
+SHIPPED_DIR = SKINS_DIR  # the default folder of every command (softhand.paths)
 
 
 def save_calibration(cal: SkinCalibration, out_dir: str | Path = SHIPPED_DIR) -> Path:

@@ -6,19 +6,18 @@ laws (Fig. 8) and how the set was produced.
 
 from __future__ import annotations
 
-import multiprocessing
-import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
 from softhand import __version__
 from softhand.io import atomic_write_json
+from softhand.parallel import run_tasks
 from softhand.skin.calibrate import SkinCalibration, calibrate_skin
 from softhand.skin.files import FE_DIR, SHIPPED_DIR, save_calibration
 
-__all__ = ["METRICS", "calibrate_many", "summary_table"]
+__all__ = ["METRICS", "CalibrationRun", "calibrate_many", "summary_table"]
 
 METRICS = ("rms_error_pct_of_2N", "max_error_pct_of_2N", "mass_sensitivity_pct",
            "relaxation_error_pct", "step_us")
@@ -26,43 +25,65 @@ EXTRA = ("posture_sensitivity_pct",)
 
 
 def _one(name: str, reps: tuple[str, ...], fe_dir: str) -> SkinCalibration:
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1):
-        return calibrate_skin(name, fe_dir=fe_dir, representations=reps)
+    return calibrate_skin(name, fe_dir=fe_dir, representations=reps)
 
 
 def calibrate_many(names: list[str], representations: tuple[str, ...], *,
                    out_dir: str | Path | None = None, fe_dir: str | Path | None = None,
-                   jobs: int | None = None, show_progress: bool = True) -> dict[str, Any]:
-    """Calibrate ``names``, write one file each and ``index.json``; return the summary."""
+                   threads: int | None = None, show_progress: bool = True) -> CalibrationRun:
+    """Calibrate ``names``, write one file each and ``index.json``; return what happened.
+
+    Every skin that finished is written (atomically) even when others failed or Ctrl-C stopped
+    the batch; ``index.json`` then summarises every file in the folder and lists the skins of this
+    run that are missing.
+
+    Args:
+        threads: skins calibrated at once, one single-threaded worker process each (None:
+            :func:`softhand.parallel.default_threads`).
+    """
     from tqdm import tqdm
 
     out = Path(out_dir) if out_dir else SHIPPED_DIR
     fe = str(fe_dir) if fe_dir else str(FE_DIR)
-    jobs = min(len(names), jobs or os.cpu_count() or 1)
-    cals: dict[str, SkinCalibration] = {}
     bar = tqdm(total=len(names), desc="calibrate", unit="skin", disable=not show_progress)
-    if jobs == 1:
-        for n in names:
-            bar.set_postfix_str(n)
-            cals[n] = _one(n, representations, fe)
-            bar.update()
-    else:
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = {pool.submit(_one, n, representations, fe): n for n in names}
-            for fut in as_completed(futures):
-                cals[futures[fut]] = fut.result()
-                bar.set_postfix_str(futures[fut])
-                bar.update()
-    bar.close()
-    for n in names:
-        save_calibration(_merged(cals[n], out), out)
-    return rebuild_index(out, representations)
+
+    def done(name, ok: bool) -> None:
+        bar.set_postfix_str(name if ok else f"{name} failed")
+        bar.update()
+
+    try:
+        batch = run_tasks(_one, [(n, (n, representations, fe)) for n in names],
+                          threads=threads, on_done=done)
+    finally:
+        bar.close()
+    for cal in batch.results.values():
+        save_calibration(_merged(cal, out), out)
+    missing = {n: "interrupted" for n in batch.missing}
+    missing.update({n: str(e) for n, e in batch.errors.items()})
+    index = rebuild_index(out, representations, missing=missing) if batch.results else None
+    return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
+
+
+@dataclass(frozen=True)
+class CalibrationRun:
+    """What :func:`calibrate_many` did.
+
+    Attributes:
+        index: the rewritten ``index.json`` (None when no skin finished; nothing was written).
+        written: skins written in this run.
+        missing: skins asked for that were not written, with why ("interrupted" or the error).
+        interrupted: True when Ctrl-C stopped the batch.
+    """
+
+    index: dict[str, Any] | None
+    written: list[str]
+    missing: dict[str, str]
+    interrupted: bool
 
 
 def rebuild_index(out: str | Path = SHIPPED_DIR,
-                  representations: tuple[str, ...] | None = None) -> dict[str, Any]:
+                  representations: tuple[str, ...] | None = None, *,
+                  missing: dict[str, str] | None = None) -> dict[str, Any]:
     """Write ``index.json`` from every calibration file in ``out``; return it."""
     from softhand.fem.sweep import git_revision
     from softhand.laws.lifelike import lifelike_ranking
@@ -79,7 +100,8 @@ def rebuild_index(out: str | Path = SHIPPED_DIR,
         "lifelike": [r.to_dict() for r in lifelike_ranking({n: c.law for n, c in cals.items()})],
         "provenance": {"softhand_version": __version__, "git_revision": git_revision(),
                        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                       "last_representations": list(representations or ())},
+                       "last_representations": list(representations or ()),
+                       "last_missing": dict(missing or {})},
     }
     atomic_write_json(out / "index.json", summary)
     return summary

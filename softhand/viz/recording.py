@@ -41,6 +41,7 @@ import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
 from softhand.hands import regions
+from softhand.io import check_writable_file
 
 __all__ = [
     "ARROW_M_PER_N",
@@ -215,10 +216,7 @@ def _geom_shape(model: mujoco.MjModel, g: int) -> tuple[type, dict[str, Any]] | 
 
 
 def _validate(path: Path, model: mujoco.MjModel, frames: HandshakeFrames, max_force_N: float):
-    if path.suffix != ".rrd":
-        raise ValueError(f"path = {str(path)!r}: expected a file name ending in .rrd")
-    if not path.parent.is_dir():
-        raise ValueError(f"path = {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    check_writable_file(path, suffix=".rrd")
     if not (math.isfinite(max_force_N) and max_force_N > 0):
         raise ValueError(f"max_force_N = {max_force_N}: expected a positive finite force in N")
     if frames.qpos.shape[1] != model.nq:
@@ -361,7 +359,7 @@ def record_handshake(
 
     Raises:
         ValueError: if ``frames`` does not fit ``model`` (qpos width, mocap count, regions), the
-            path is not a .rrd file in an existing folder, or ``max_force_N`` is not positive.
+            path is not a writable .rrd file path (a missing folder is created), or ``max_force_N`` is not positive.
         RuntimeError: if rerun logging is disabled (environment variable ``RERUN=off``).
     """
     path = Path(path)
@@ -369,6 +367,7 @@ def record_handshake(
     rec = rr.RecordingStream(application_id, send_properties=True)
     if not rec.is_enabled():
         raise RuntimeError("rerun logging is disabled (environment variable RERUN)")
+    path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
