@@ -1,0 +1,203 @@
+"""Bad input on the command line: one line naming the flag and the value, exit 2, no work, no file.
+
+Every case of the reliability issue's list (and its neighbours) is here, one parametrised test per
+class of input. The work functions are replaced by ones that fail the test if called, so "before
+any work starts" is checked, not assumed.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from softhand.cli import main
+from softhand.paths import FE_DIR
+
+FAST = ["--mode", "2d", "--hold", "0"]
+
+
+@pytest.fixture(autouse=True)
+def no_work(monkeypatch):
+    """Any FE run, sweep, calibration or handshake episode fails the test."""
+    def forbidden(*args, **kwargs):
+        raise AssertionError("work started before the input was rejected")
+
+    import softhand.envs.run
+    import softhand.fem.abaqus
+    import softhand.fem.solver
+    import softhand.fem.sweep
+    import softhand.skin.run
+
+    monkeypatch.setattr(softhand.fem.solver, "indent", forbidden)
+    monkeypatch.setattr(softhand.fem.sweep, "run_sweep", forbidden)
+    monkeypatch.setattr(softhand.fem.abaqus, "write_deck", forbidden)
+    monkeypatch.setattr(softhand.skin.run, "calibrate_many", forbidden)
+    monkeypatch.setattr(softhand.envs.run, "run_handshake", forbidden)
+
+
+def rejected(args: list[str], *needles: str, cwd: Path | None = None) -> str:
+    """Run the CLI; assert exit 2 and one line holding every needle; return the line."""
+    res = CliRunner().invoke(main, args)
+    line = res.output.strip()
+    assert res.exit_code == 2, (res.exit_code, res.output, res.exception)
+    assert "\n" not in line and line.startswith("error: "), res.output
+    assert "Traceback" not in res.output and "Usage:" not in res.output
+    for needle in needles:
+        assert needle in line, (needle, line)
+    return line
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["fe", "indent", "solid-pu", "--speed", "nan"], ["'--speed'", "'nan'", "0 < x <= 100 mm/s"]),
+    (["fe", "indent", "solid-pu", "--speed", "0"], ["'--speed'", "0 < x <= 100 mm/s"]),
+    (["fe", "indent", "solid-pu", "--hold", "-1"], ["'--hold'", "'-1'", "0 <= x <= 600 s"]),
+    (["fe", "indent", "solid-pu", "--max-force", "1e6"], ["'--max-force'", "'1e6'", "<= 50 N"]),
+    (["fe", "indent", "solid-pu", "--max-depth", "0"], ["'--max-depth'", "<= 7 mm"]),
+    (["fe", "indent", "solid-pu", "--threads", "0"], ["'--threads'", "0"]),
+    (["fe", "sweep", "--speed", "inf"], ["'--speed'", "'inf'"]),
+    (["handshake", "--timestep", "1e-7"], ["'--timestep'", "'1e-7'", "0.0001 <= x <= 0.005 s"]),
+    (["handshake", "--timestep", "0.01"], ["'--timestep'", "'0.01'", "0.0001 <= x <= 0.005 s"]),
+    (["handshake", "--seed", "-1"], ["'--seed'", "-1"]),
+    (["handshake", "--seed", "1.5"], ["'--seed'", "1.5"]),
+    (["fe", "export", "solid-pu", "x.inp", "--depth", "-2"], ["'--depth'", "'-2'"]),
+])
+def test_numbers_outside_their_range(args, needles):
+    rejected(args, *needles)
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["handshake", "--design", ""], ["--design ''"]),
+    (["handshake", "--record", ""], ["--record = ''", "empty"]),
+    (["fe", "indent", "solid-pu", "--out", ""], ["--out = ''", "empty"]),
+    (["fe", "sweep", "--out", ""], ["--out = ''", "empty"]),
+    (["fe", "indent", "solid-pu", "--materials", ""], ["--materials ''", "empty"]),
+    (["calibrate", "solid-pu", "--fe-dir", "", "--out", "x"], ["--fe-dir ''"]),
+    (["fe", "indent", ""], ["design ''"]),
+])
+def test_empty_strings(args, needles):
+    rejected(args, *needles)
+
+
+def test_paths_that_cannot_be_written(tmp_path):
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    rejected(["handshake", "--record", str(tmp_path / "x.txt")], "--record", "ending in .rrd")
+    rejected(["handshake", "--record", str(tmp_path)], "--record", ".rrd")
+    rejected(["handshake", "--record", str(plain / "x.rrd")], "--record", "is a file")
+    rejected(["fe", "indent", "solid-pu", "--out", str(plain / "out")], "--out", "is a file")
+    rejected(["fe", "indent", "solid-pu", "--out", str(plain)], "--out", "is a file, not a folder")
+    rejected(["fe", "sweep", "--out", str(plain / "a" / "b")], "--out", "is a file")
+    rejected(["bench", "fe", "--out", str(plain)], "--out", "not a folder")
+    rejected(["fe", "export", "solid-pu", str(tmp_path / "deck.txt")], "OUT", ".inp")
+    rejected(["fe", "export", "solid-pu", str(plain / "deck.inp")], "OUT", "is a file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
+
+
+def test_shipped_calibration_is_not_replaced_by_a_subset():
+    """Default --out is the shipped folder: a subset (or other settings) needs --force."""
+    before = {p: p.stat().st_mtime_ns for p in FE_DIR.glob("*")}
+    rejected(["fe", "sweep", "--design", "solid-pu"], "shipped calibration", "1 of the 12",
+             "--force")
+    rejected(["fe", "sweep", "--speed", "5"], "shipped calibration", "speed_mm_s", "--force")
+    rejected(["fe", "indent", "solid-pu", "--out", str(FE_DIR)], "shipped", "--force")
+    rejected(["calibrate", "pocket2-sil"], "shipped calibration", "1 of 14 skins", "--force")
+    rejected(["calibrate", "--representation", "rigid"], "shipped", "1 of 4 representations")
+    assert {p: p.stat().st_mtime_ns for p in FE_DIR.glob("*")} == before
+
+
+@pytest.mark.parametrize("content, needles", [
+    ("{not json", ["not JSON", "line 1"]),
+    ("[1, 2]", ["expected an object keyed by material name", "list"]),
+    (json.dumps({"sil": {"mu_MPa": 3}}), ["sil.mu_MPa = 3", "list of 2"]),
+    (json.dumps({"sil": {"alpha": "x"}}), ["sil.alpha", "'x'"]),
+    (json.dumps({"sil": {"nu": [0.3]}}), ["sil.nu"]),
+    (json.dumps({"sil": {"viscosity": 1}}), ["viscosity"]),
+    (json.dumps({"sil": 5}), ["sil"]),
+    (json.dumps({"rubber": {}}), ["rubber"]),
+])
+def test_material_files(tmp_path, content, needles):
+    path = tmp_path / "mat.json"
+    path.write_text(content)
+    out = tmp_path / "out"
+    rejected(["fe", "indent", "solid-sil", *FAST, "--materials", str(path), "--out", str(out)],
+             "--materials", str(path), *needles)
+    assert not out.exists()
+
+
+def test_elastic_only_still_checks_the_prony_constants(tmp_path):
+    path = tmp_path / "mat.json"
+    path.write_text(json.dumps({"sil": {"g": [0.5, 0.4, 0.3]}}))
+    rejected(["fe", "indent", "solid-sil", "--elastic-only", "--materials", str(path)],
+             "--materials", "sil.g")
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["fe", "indent", "solid-sil", "--geometry", "pocket_height_mm=2"],
+     ["--geometry pocket_height_mm=2", "solid-sil has no pocket", "pocket2-sil"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "pocket_height_mm=-1"],
+     ["--geometry", "pocket_height_mm = -1"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "height_mm=1e6"],
+     ["--geometry height_mm=1e6", "height_mm = 1000000"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "height_mm"], ["--geometry 'height_mm'",
+                                                                  "KEY=VALUE"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "height_mm=tall"], ["'tall'", "not a number"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "height_mm=nan"], ["'nan'", "finite"]),
+    (["fe", "indent", "pocket2-sil", "--geometry", "wingspan_mm=3"], ["wingspan_mm"]),
+    (["fe", "sweep", "--geometry", "pocket_height_mm=1.5", "--out", "x"],
+     ["solid-sil has no pocket"]),
+])
+def test_geometry_overrides(args, needles):
+    rejected(args, *needles)
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["fe", "indent", "pocket3-sil"], ["'pocket3-sil'", "pocket2-pu-sil"]),
+    (["fe", "sweep", "--design", "jelly", "--out", "x"], ["'jelly'"]),
+    (["calibrate", "pocket3-sil", "--out", "x"], ["skin 'pocket3-sil' is unknown"]),
+    (["calibrate", "solid-pu", "--representation", "jelly", "--out", "x"],
+     ["--representation 'jelly' is unknown", "soft-contact"]),
+    (["handshake", "--design", "jelly"], ["'jelly'"]),
+    (["handshake", "--skin", "Pinky9=rigid"], ["'Pinky9'"]),
+    (["handshake", "--skin", "Palm1"], ["--skin 'Palm1'", "REGION=DESIGN"]),
+    (["handshake", "--controller", "telepathy"], ["'--controller'", "'telepathy'"]),
+    (["fe", "export", "solid-pu", "x.inp", "--mode", "2d"], ["--mode"]),
+    (["fe", "export", "solid-pu", "x.inp", "--format", "stl"], ["'--format'", "'stl'"]),
+    (["bench", "calibration", "--skin", "jelly"], ["--skin 'jelly'"]),
+])
+def test_unknown_names(args, needles):
+    rejected(args, *needles)
+
+
+def _fe_copy(tmp_path: Path, design: str) -> Path:
+    fe = tmp_path / "fe"
+    fe.mkdir()
+    shutil.copy(FE_DIR / f"{design}.csv", fe / f"{design}.csv")
+    return fe
+
+
+def test_truncated_fe_curve_names_the_file_and_line(tmp_path):
+    fe = _fe_copy(tmp_path, "solid-pu")
+    text = (fe / "solid-pu.csv").read_text()
+    (fe / "solid-pu.csv").write_text(text[: len(text) // 2].rsplit(",", 1)[0])
+    rejected(["calibrate", "solid-pu", "--fe-dir", str(fe), "--out", str(tmp_path / "out")],
+             "--fe-dir", "solid-pu.csv", "line")
+    assert not (tmp_path / "out").exists()
+
+
+def test_fe_curve_with_a_word_for_a_number_names_the_file(tmp_path):
+    fe = _fe_copy(tmp_path, "solid-pu")
+    lines = (fe / "solid-pu.csv").read_text().splitlines()
+    cells = lines[5].split(",")
+    lines[5] = ",".join([cells[0], "abc", *cells[2:]])
+    (fe / "solid-pu.csv").write_text("\n".join(lines) + "\n")
+    rejected(["calibrate", "solid-pu", "--fe-dir", str(fe), "--out", str(tmp_path / "out")],
+             "solid-pu.csv", "line 6", "'abc'")
+
+
+def test_missing_fe_curve_names_the_folder(tmp_path):
+    rejected(["calibrate", "solid-pu", "--fe-dir", str(tmp_path), "--out", str(tmp_path / "o")],
+             "--fe-dir", "solid-pu.csv", "softhand fe sweep")

@@ -1,0 +1,110 @@
+"""Ctrl-C (SIGINT to the process group): batches stop, keep what finished, exit 130, no partial file.
+
+The signal is sent the way a terminal sends it: to every process of the group, workers included.
+The timeouts below only guard against a hang (a worker left running would take minutes); how fast a
+batch stops is measured by hand and reported in the README, not asserted.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+HANG_S = 60
+
+
+def _start(args: list[str], **kw) -> subprocess.Popen:
+    return subprocess.Popen(args, start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+def _interrupt_when(proc: subprocess.Popen, stream, marker: str) -> tuple[str, str]:
+    """Read ``stream`` until ``marker`` appears, then SIGINT the group; return stdout, stderr."""
+    seen = ""
+    while marker not in seen:
+        ch = stream.read(1)
+        if not ch:
+            break
+        seen += ch
+    assert marker in seen, f"{marker!r} never appeared: {seen[-500:]}"
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=HANG_S)
+    return (seen + out, err) if stream is proc.stdout else (out, seen + err)
+
+
+def test_run_tasks_keeps_the_finished_task_and_stops_the_running_one(tmp_path):
+    (tmp_path / "naps.py").write_text("import time\n\ndef nap(s):\n    time.sleep(s)\n"
+                                      "    return s\n")
+    script = tmp_path / "batch.py"
+    script.write_text(textwrap.dedent("""
+        import json, sys
+        from naps import nap
+        from softhand.parallel import run_tasks
+
+        if __name__ == "__main__":
+            out = run_tasks(nap, [("fast", (0.05,)), ("slow", (600.0,))], threads=2,
+                            on_done=lambda key, ok: print("done", key, flush=True))
+            print(json.dumps({"results": out.results, "missing": out.missing,
+                              "interrupted": out.interrupted}), flush=True)
+            sys.exit(130 if out.interrupted else 0)
+    """))
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    proc = _start([sys.executable, str(script)], env=env, cwd=tmp_path)
+    out, err = _interrupt_when(proc, proc.stdout, "done fast")
+    assert proc.returncode == 130, err
+    outcome = json.loads(out[out.index('{"results"'):].strip())
+    assert outcome == {"results": {"fast": 0.05}, "missing": ["slow"], "interrupted": True}
+
+
+@pytest.mark.slow
+def test_fe_sweep_writes_the_finished_design_and_lists_the_missing_one(tmp_path):
+    out_dir = tmp_path / "fe"
+    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
+                   "--mesh", "fine", "--hold", "0", "--max-force", "10", "--threads", "2",
+                   "--design", "solid-pu", "--design", "pocket2-sil", "--out", str(out_dir)])
+    _, err = _interrupt_when(proc, proc.stderr, "1/2")
+    assert proc.returncode == 130, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("interrupted (Ctrl-C): wrote 1 of 2 designs") and "pocket2-sil" in last
+    summary = json.loads((out_dir / "summary.json").read_text())
+    assert summary["complete"] is False
+    assert summary["missing"] == {"pocket2-sil": "interrupted"}
+    assert list(summary["designs"]) == ["solid-pu"]
+    assert sorted(p.name for p in out_dir.iterdir()) == ["solid-pu.csv", "summary.json"]
+    assert "Traceback" not in err
+
+
+def test_interrupted_single_run_writes_nothing(tmp_path):
+    out_dir = tmp_path / "out"
+    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "indent", "pocket2-sil",
+                   "--mode", "2d", "--mesh", "fine", "--max-force", "10", "--out", str(out_dir)])
+    _, err = _interrupt_when(proc, proc.stderr, "pocket2-sil:")
+    assert proc.returncode == 130
+    assert err.strip().splitlines()[-1] == "interrupted (Ctrl-C); nothing was written"
+    assert not out_dir.exists()
+
+
+def test_no_temporary_file_is_left_by_an_interrupted_write(tmp_path):
+    """atomic_open: an exception inside the block removes the temp file; the old file stays."""
+    from softhand.io import atomic_write_text
+
+    target = tmp_path / "f.txt"
+    atomic_write_text(target, "old")
+
+    class Boom(BaseException):
+        pass
+
+    from softhand.io import atomic_open
+
+    with pytest.raises(Boom), atomic_open(target) as fh:
+        fh.write("new, half")
+        raise Boom
+    assert target.read_text() == "old"
+    assert [p.name for p in Path(tmp_path).iterdir()] == ["f.txt"]
