@@ -428,8 +428,9 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
                               progress=progress)
         except ValueError as exc:
             _bad(str(exc))
-    click.echo(f"wrote {info.path} ({fmt}, plate travel {info.depth_mm:.4g} mm: "
-               f"{info.depth_source})")
+    source = ("--depth" if info.depth_source == "given"
+              else f"softhand's own travel to --max-force {settings.max_force_N:g} N")
+    click.echo(f"wrote {info.path} ({fmt}, plate travel {info.depth_mm:.4g} mm: {source})")
 
 
 @main.command("calibrate")

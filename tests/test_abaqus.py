@@ -2,27 +2,31 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pytest
 
 import softhand
+import softhand.fem.abaqus as abaqus
 from softhand.fem.abaqus import (
     C3D20_FACES,
     C3D20_NATURAL,
+    DeckInfo,
     c3d20_connectivity,
     corner_volumes,
     face_label,
     inp_text,
+    write_deck,
     write_inp,
 )
 from softhand.fem.geometry import parse_design
 from softhand.fem.mesh import Mesh, build_mesh
-from softhand.fem.solver import IndentationSettings
+from softhand.fem.solver import IndentationSettings, indent
 from softhand.paper import paper
 
 COARSE = IndentationSettings(mesh="coarse")
+DEPTH = 2.0  # given plate travel: no softhand run needed
 
 
 @dataclass
@@ -88,7 +92,7 @@ def mesh_of(design: str, settings: IndentationSettings = COARSE) -> Mesh:
 @pytest.fixture(scope="module", params=["solid-sil", "pocket1-pu", "pocket2-sil-pu"])
 def deck(request) -> tuple[str, list[Block], Mesh]:
     name = request.param
-    return name, parse(inp_text(name, COARSE)), mesh_of(name)
+    return name, parse(inp_text(name, COARSE, depth_mm=DEPTH)), mesh_of(name)
 
 
 def model(blocks: list[Block]) -> tuple[np.ndarray, np.ndarray]:
@@ -147,8 +151,9 @@ def test_parser_reads_element_continuations() -> None:
 def test_heading(deck) -> None:
     name, blocks, _ = deck
     assert blocks[0].keyword == "HEADING"
-    text = inp_text(name, COARSE)
+    text = inp_text(name, COARSE, depth_mm=DEPTH)
     head = text.split("*NODE")[0]
+    assert "** plate travel 2 mm: given" in head
     version = getattr(softhand, "__version__", "0.1.0")
     assert name in head and f"softhand {version}" in head
     assert "mm, N, s, MPa" in head
@@ -245,7 +250,8 @@ def test_boundary_node_sets(deck) -> None:
 @pytest.mark.parametrize("moduli", ["long-term", "instantaneous"])
 @pytest.mark.parametrize("design", ["solid-sil-pu", "pocket2-pu-sil"])
 def test_material_data_equal_table3(moduli: str, design: str) -> None:
-    blocks = parse(inp_text(design, IndentationSettings(mesh="coarse", moduli=moduli)))
+    blocks = parse(inp_text(design, IndentationSettings(mesh="coarse", moduli=moduli),
+                            depth_mm=DEPTH))
     table = paper()["materials"]
     for name in ("sil", "pu"):
         i = blocks.index(one(blocks, "MATERIAL", NAME=name.upper()))
@@ -267,7 +273,7 @@ def test_material_data_equal_table3(moduli: str, design: str) -> None:
 
 
 def test_homogeneous_design_writes_one_material() -> None:
-    blocks = parse(inp_text("pocket1-sil", COARSE))
+    blocks = parse(inp_text("pocket1-sil", COARSE, depth_mm=DEPTH))
     assert [b.params["NAME"] for b in find(blocks, "MATERIAL")] == ["SIL"]
 
 
@@ -298,14 +304,16 @@ def test_steps_viscous() -> None:
 
 
 def test_elastic_only_and_no_hold() -> None:
-    blocks = parse(inp_text("solid-pu", IndentationSettings(mesh="coarse", elastic_only=True)))
+    blocks = parse(inp_text("solid-pu", IndentationSettings(mesh="coarse", elastic_only=True),
+                            depth_mm=DEPTH))
     assert not find(blocks, "VISCOELASTIC") and not find(blocks, "VISCO")
     assert len(find(blocks, "STATIC")) == 1 and len(find(blocks, "STEP")) == 1
     hyper = one(blocks, "HYPERFOAM")
     assert "MODULI" not in hyper.params
     row = paper()["materials"]["pu"]
     assert float(hyper.data[0][0]) == row["mu_MPa"][0]
-    blocks = parse(inp_text("solid-pu", IndentationSettings(mesh="coarse", hold_s=0.0)))
+    blocks = parse(inp_text("solid-pu", IndentationSettings(mesh="coarse", hold_s=0.0),
+                            depth_mm=DEPTH))
     assert len(find(blocks, "STEP")) == 1 and len(find(blocks, "VISCO")) == 1
 
 
@@ -317,19 +325,141 @@ def test_write_inp_equals_inp_text(tmp_path) -> None:
     assert sorted(p.name for p in path.parent.iterdir()) == ["deck.inp"]
 
 
+def no_fe_run(*args, **kwargs):
+    raise AssertionError("softhand ran before the inputs were validated")
+
+
 @pytest.mark.parametrize(
-    ("design", "settings", "depth", "needle"),
+    ("design", "settings", "depth", "fmt", "needle"),
     [
-        ("pocket3-sil", COARSE, None, "pocket3-sil"),
-        ("solid-sil", IndentationSettings(mode="2d", mesh="coarse"), None, "'2d'"),
-        ("solid-sil", COARSE, 0.0, "0.0"),
-        ("solid-sil", COARSE, -1.5, "-1.5"),
-        ("solid-sil", COARSE, float("nan"), "nan"),
+        ("pocket3-sil", COARSE, None, "inp", "pocket3-sil"),
+        ("solid-sil", IndentationSettings(mode="2d", mesh="coarse"), None, "inp", "'2d'"),
+        ("solid-sil", IndentationSettings(mode="2d", mesh="coarse"), None, "ccx", "'2d'"),
+        ("solid-sil", COARSE, 0.0, "inp", r"0\.0 is outside the allowed range \(0, 9\)"),
+        ("solid-sil", COARSE, -1.5, "ccx", "-1.5"),
+        ("solid-sil", COARSE, float("nan"), "inp", "nan"),
+        ("solid-sil", COARSE, 9.0, "inp", r"9\.0 is outside the allowed range \(0, 9\)"),
+        ("solid-sil", COARSE, "deep", "inp", "'deep'"),
+        ("solid-sil", COARSE, None, "odb", "fmt = 'odb': allowed inp, ccx"),
+        ("solid-sil", replace(COARSE, geometry={"pocket_height_mm": 7.0}), None, "inp",
+         "pocket_height_mm = 7.0"),
     ],
 )
-def test_invalid_calls_raise_and_leave_no_file(tmp_path, design, settings, depth, needle) -> None:
+def test_invalid_calls_raise_before_any_run_and_leave_no_file(tmp_path, monkeypatch, design,
+                                                               settings, depth, fmt,
+                                                               needle) -> None:
+    monkeypatch.setattr(abaqus, "indent", no_fe_run)
     path = tmp_path / "bad.inp"
     with pytest.raises(ValueError, match=needle):
-        write_inp(design, path, settings, depth_mm=depth)
-    assert not path.exists()
+        write_deck(design, path, settings, fmt=fmt, depth_mm=depth)
     assert list(tmp_path.iterdir()) == []
+    if fmt == "inp":
+        with pytest.raises(ValueError, match=needle):
+            write_inp(design, path, settings, depth_mm=depth)
+        assert not path.exists()
+
+
+def test_a_folder_as_path_is_refused(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(abaqus, "indent", no_fe_run)
+    with pytest.raises(ValueError, match="is a folder"):
+        write_deck("solid-sil", tmp_path, COARSE)
+
+
+def hyperfoam_of(blocks: list[Block], name: str) -> tuple[Block, list[float]]:
+    i = blocks.index(one(blocks, "MATERIAL", NAME=name.upper()))
+    hyper = blocks[i + 1]
+    assert hyper.keyword == "HYPERFOAM"
+    return hyper, [float(v) for row in hyper.data for v in row]
+
+
+@pytest.mark.parametrize("elastic_only", [False, True])
+def test_material_constants_reach_the_hyperfoam_data(elastic_only: bool) -> None:
+    """--materials: the user's mu, alpha, nu and Prony terms are written, not Table 3's."""
+    constants = {"mu_MPa": [0.12, 0.02], "alpha": [2.0, 9.0], "nu": 0.45,
+                 "g": [0.1, 0.2, 0.05], "tau_s": [0.5, 2.0, 9.0]}
+    s = IndentationSettings(mesh="coarse", elastic_only=elastic_only,
+                            materials={"sil": constants})
+    blocks = parse(inp_text("pocket2-sil-pu", s, depth_mm=DEPTH))
+    _, sil = hyperfoam_of(blocks, "sil")
+    assert sil == pytest.approx([0.12, 2.0, 0.02, 9.0, 0.45, 0.45], rel=1e-12)
+    _, pu = hyperfoam_of(blocks, "pu")  # the other material keeps Table 3
+    assert pu[0] == paper()["materials"]["pu"]["mu_MPa"][0]
+    visco = find(blocks, "VISCOELASTIC")
+    if elastic_only:
+        assert not visco
+    else:
+        i = blocks.index(one(blocks, "MATERIAL", NAME="SIL"))
+        assert blocks[i + 2].data == [[f"{g}", f"{g}", f"{t}"] for g, t in
+                                      zip(("0.1", "0.2", "0.05"), ("0.5", "2.", "9."),
+                                          strict=True)]
+
+
+@pytest.mark.parametrize("moduli", ["long-term", "instantaneous"])
+def test_moduli_with_user_constants(moduli: str) -> None:
+    """MODULI follows the setting and the mu are the values as given (Abaqus reads them so)."""
+    s = IndentationSettings(mesh="coarse", moduli=moduli, materials={"pu": {"mu_MPa": [0.2, 0.1]}})
+    hyper, values = hyperfoam_of(parse(inp_text("solid-pu", s, depth_mm=DEPTH)), "pu")
+    assert hyper.params["MODULI"] == {"long-term": "LONG TERM", "instantaneous": "INSTANTANEOUS"}[moduli]
+    assert values[0] == pytest.approx(0.2, rel=1e-12) and values[2] == pytest.approx(0.1, rel=1e-12)
+
+
+def test_geometry_overrides_move_the_nodes_and_the_plate() -> None:
+    s = IndentationSettings(mesh="coarse", geometry={"height_mm": 10.0, "width_mm": 18.0})
+    blocks = parse(inp_text("solid-sil", s, depth_mm=DEPTH))
+    X, conn = model(blocks)
+    used = np.unique(conn)
+    assert X[used, 1].max() == pytest.approx(10.0, abs=1e-9)
+    assert X[used, 0].max() == pytest.approx(9.0, abs=1e-9)
+    np.testing.assert_allclose(X[1:], mesh_of("solid-sil", s).X, atol=1e-10)
+    assert [float(v) for v in one(blocks, "NODE", NSET="PLATE_RP").data[0][1:]] == [0, 10, 0]
+    plate = one(blocks, "SURFACE", NAME="PLATE")
+    assert float(plate.data[0][1]) == 10.0 and float(plate.data[2][1]) == 9.0 + 2.0
+
+
+def plate_travel_in(blocks: list[Block]) -> list[float]:
+    return [float(r[3]) for b in find(blocks, "BOUNDARY") for r in b.data
+            if r[:3] == ["PLATE_RP", "2", "2"]]
+
+
+def test_max_force_sets_the_travel_to_softhands_displacement(tmp_path) -> None:
+    """No depth: the ramp goes to softhand's own d(max_force_N) for the same (viscous) model."""
+    s = IndentationSettings(mesh="coarse", max_force_N=1.0, hold_s=3.0)
+    calls: list[float] = []
+    info = write_deck("solid-pu", tmp_path / "d.inp", s, progress=calls.append)
+    expected = indent("solid-pu", replace(s, hold_s=0.0))
+    assert info == DeckInfo(tmp_path / "d.inp", "inp", float(expected.displacement_mm[-1]),
+                            "softhand")
+    assert expected.force_N[-1] == pytest.approx(1.0, rel=2e-3)
+    assert calls and calls[-1] == 1.0
+    text = info.path.read_text(encoding="utf-8")
+    assert (f"** plate travel {info.depth_mm:.6g} mm: softhand's d(F = 1 N) for this model"
+            in text)
+    blocks = parse(text)
+    assert plate_travel_in(blocks) == pytest.approx([-info.depth_mm] * 2, rel=1e-11)
+    assert [float(b.data[0][1]) for b in find(blocks, "VISCO")] == pytest.approx(
+        [info.depth_mm / 0.5, 3.0])
+
+
+def test_given_depth_is_used_as_is(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(abaqus, "indent", no_fe_run)
+    info = write_deck("solid-pu", tmp_path / "d.inp", COARSE, depth_mm=1.25)
+    assert (info.depth_mm, info.depth_source) == (1.25, "given")
+    text = info.path.read_text(encoding="utf-8")
+    assert "** plate travel 1.25 mm: given" in text
+    assert plate_travel_in(parse(text)) == [-1.25, -1.25]
+
+
+@pytest.mark.parametrize(("hold", "speed", "elastic", "steps"), [
+    (0.0, 0.5, False, {"RAMP": 4.0}),
+    (7.5, 0.25, False, {"RAMP": 8.0, "HOLD": 7.5}),
+    (7.5, 0.5, True, {"RAMP": 4.0}),  # elastic: no hold, as in softhand
+])
+def test_hold_and_speed_set_the_steps(hold: float, speed: float, elastic: bool,
+                                      steps: dict[str, float]) -> None:
+    s = IndentationSettings(mesh="coarse", hold_s=hold, speed_mm_s=speed, elastic_only=elastic)
+    blocks = parse(inp_text("pocket1-pu", s, depth_mm=DEPTH))
+    assert [b.params["NAME"] for b in find(blocks, "STEP")] == list(steps)
+    proc = find(blocks, "STATIC" if elastic else "VISCO")
+    assert [float(b.data[0][1]) for b in proc] == pytest.approx(list(steps.values()))
+    assert bool(find(blocks, "VISCOELASTIC")) is not elastic
+    assert plate_travel_in(blocks) == [-DEPTH] * len(steps)

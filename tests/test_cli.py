@@ -47,11 +47,26 @@ def test_sweep_writes_curves_summary_and_plot(tmp_path):
 
 
 def test_export_writes_an_abaqus_deck(tmp_path):
-    """fe export writes a deck with the hyperfoam material."""
+    """fe export writes a deck with the hyperfoam material and the travel softhand found."""
     out = tmp_path / "deck.inp"
     res = run(["fe", "export", "pocket2-sil", str(out), "--mesh", "coarse"])
     assert res.exit_code == 0, res.output
-    assert "*HYPERFOAM" in out.read_text()
+    assert "*HYPERFOAM" in out.read_text() and "*VISCOELASTIC" in out.read_text()
+    assert "softhand's own travel to --max-force 2 N" in res.output
+
+
+def test_export_calculix_deck_honours_the_options(tmp_path):
+    """--format ccx: elastic CalculiX deck, user constants and the given travel in it."""
+    out = tmp_path / "deck.inp"
+    mat = tmp_path / "mat.json"
+    mat.write_text(json.dumps({"pu": {"mu_MPa": [0.2, 0.063]}}))
+    res = run(["fe", "export", "solid-pu", str(out), "--mesh", "coarse", "--format", "ccx",
+               "--depth", "0.4", "--materials", str(mat)])
+    assert res.exit_code == 0, res.output
+    text = out.read_text()
+    assert "TYPE=SURFACE TO SURFACE" in text and "\n*VISCOELASTIC" not in text
+    assert "no Prony viscoelasticity" in text and "0.4 mm: given" in text
+    assert "0.2, 5.5" in text  # mu_1 = 0.2 MPa with alpha_1 = 5.5 in the *HYPERFOAM data
 
 
 def _materials(tmp_path, constants):
@@ -76,12 +91,12 @@ def test_bad_geometry_or_settings_names_the_value_and_writes_nothing(tmp_path, e
 
 
 @pytest.mark.parametrize("constants,needle", [
-    ({"nu": 0.5}, "nu = 0.5 is outside the allowed range (-1, 0.5)"),
+    ({"nu": 0.5}, "sil.nu = 0.5: expected a finite number in (0, 0.5)"),
     ({"nu": -1.2}, "nu = -1.2"),
-    ({"mu_MPa": [0.0, 0.01]}, "mu (MPa)[0] = 0.0"),
-    ({"mu_MPa": [-0.08, 0.01]}, "mu (MPa)[0] = -0.08"),
-    ({"tau_s": [0.025, 0.0, 0.3]}, "tau (s)[1] = 0.0"),
-    ({"g": [0.5, 0.3, 0.2]}, "sum(g) = 1.0 must be < 1"),
+    ({"mu_MPa": [0.0, 0.01]}, "sil.mu_MPa[0] = 0.0"),
+    ({"mu_MPa": [-0.08, 0.01]}, "sil.mu_MPa[0] = -0.08"),
+    ({"tau_s": [0.025, 0.0, 0.3]}, "sil.tau_s[1] = 0.0"),
+    ({"g": [0.5, 0.3, 0.2]}, "the sum 1 must be < 1"),
     ({"alpha": [0.0, 15.5]}, "alpha[0] = 0.0"),
 ])
 def test_bad_material_constants_name_the_value_and_write_nothing(tmp_path, constants, needle):

@@ -14,7 +14,6 @@ from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import IndentationSettings, indent
 from softhand.paper import paper
 
-
 pytestmark = pytest.mark.slow  # the 12-design 3D fixture: about a minute idle, more under load
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from gymnasium import spaces
 
 from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
-from softhand.envs.skins import add_skin_pairs, apply_skins, parse_skins
+from softhand.envs.skins import add_skin_pairs, apply_skins, parse_skins, series_law
 from softhand.hands import (
     SceneConfig,
     partner_actuators,
@@ -25,15 +25,19 @@ from softhand.hands import (
     regions,
     scene_spec,
 )
+from softhand.hands.config import TIMESTEP_RANGE_S
 from softhand.skin.files import SHIPPED_DIR
+from softhand.validate import check_number, show
 
-__all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "HandshakeEnv"]
+__all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "MAX_ACTION_PERIOD_S",
+           "TIMESTEP_RANGE_S", "HandshakeEnv"]
 
 DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
 CONTACT_N = 0.05  # a region counts as touched above this force
 _NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 _GRIPPING = ("grip", "shake")
 ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
+MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
 DEFAULT_TIMESTEP_S = SceneConfig.timestep_s
 
 
@@ -86,9 +90,10 @@ class HandshakeEnv(gym.Env):
     Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
     simulation produces a non-finite state (then ``info["unstable"]`` is True).
 
-    Timestep: the skins are calibrated for 0.5-2 ms (their rest laws hold at every step in that
-    range). 2 ms, the default, reproduces the region forces of 0.5 ms within a few percent for all
-    three controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
+    Timestep: allowed 0.1-5 ms (``TIMESTEP_RANGE_S``); the skins are calibrated for 0.5-2 ms
+    (their rest laws hold at every step in that range) and warn (``SkinRangeWarning``) outside it.
+    2 ms, the default, reproduces the region forces of 0.5 ms within a few percent for all three
+    controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
     error against 0.5 ms for each timestep).
 
     ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
@@ -98,14 +103,24 @@ class HandshakeEnv(gym.Env):
         design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or
             ``rigid``; default: the most lifelike design).
         skins: region -> skin overrides.
-        frame_skip: physics steps per action, >= 1; default: actions at 100 Hz
+        frame_skip: physics steps per action, an integer >= 1 with frame_skip x timestep_s <=
+            0.1 s (actions at 10 Hz or faster); default: actions at 100 Hz
             (``ACTION_PERIOD_S / timestep_s``, 5 steps of 2 ms).
-        timestep_s: physics timestep, in (0, 0.01] s; default 2 ms (SceneConfig).
-        squeeze: multiplier of the partner's grip force (5 for the hard case), > 0.
-        overload_N: region force above which the overload penalty applies.
-        reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries.
-        calibration_dir: folder of the skin calibration files (default: the shipped ones).
+        timestep_s: physics timestep, in [0.0001, 0.005] s (``TIMESTEP_RANGE_S``; the skins are
+            calibrated at 0.0005-0.002 s); default 2 ms (SceneConfig).
+        squeeze: multiplier of the partner's grip force (5 for the hard case), finite and > 0.
+        overload_N: region force above which the overload penalty applies, finite and > 0.
+        reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries, each finite and >= 0
+            (a weight is a magnitude: the sign of each term is fixed above).
+        calibration_dir: folder of the skin calibration files (default: the shipped ones); every
+            skin used is read and checked before the scene is built.
         randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
+
+    Raises:
+        ValueError: at construction, a bad argument or calibration file, naming it and the
+            allowed range; in :meth:`reset`, a bad seed; in :meth:`step`, an action that is not 6
+            finite real numbers in [-1, 1].
+        RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended.
 
     Version history: v0 (softhand 0.1, unreleased): first release; before the release the default
     timestep went from 1 to 2 ms and the partner's joints got armature (region forces changed).
@@ -118,30 +133,37 @@ class HandshakeEnv(gym.Env):
                  squeeze: float = 1.0,
                  overload_N: float = 10.0, reward_weights: Mapping[str, float] | None = None,
                  calibration_dir: str | Path | None = None, randomize: bool = True) -> None:
+        # every argument (and every calibration file used) is checked before any work is done
         self.config = SceneConfig(timestep_s=timestep_s)  # checks the timestep
+        timestep_s = self.config.timestep_s
+        max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
             frame_skip = max(1, round(ACTION_PERIOD_S / timestep_s))
-        if int(frame_skip) != frame_skip or frame_skip < 1:
-            raise ValueError(f"frame_skip = {frame_skip!r} must be an integer >= 1")
-        if not (np.isfinite(squeeze) and squeeze > 0):
-            raise ValueError(f"squeeze = {squeeze!r} must be finite and > 0")
-        if not (np.isfinite(overload_N) and overload_N > 0):
-            raise ValueError(f"overload_N = {overload_N!r} must be finite and > 0")
+        check_number("frame_skip", frame_skip, lo=1, hi=max_skip, integer=True,
+                     why=f"(frame_skip x timestep_s <= {MAX_ACTION_PERIOD_S:g} s)")
+        self.squeeze = check_number("squeeze", squeeze, lo=0.0, lo_open=True)
+        self.overload_N = check_number("overload_N", overload_N, lo=0.0, lo_open=True)
         weights = dict(DEFAULT_REWARD_WEIGHTS)
+        if reward_weights is not None and not isinstance(reward_weights, Mapping):
+            raise ValueError(f"reward_weights = {show(reward_weights)}: expected a mapping of "
+                             f"{', '.join(weights)} to numbers >= 0")
         for key, value in (reward_weights or {}).items():
             if key not in weights:
                 raise ValueError(f"reward weight {key!r} is unknown; allowed: {', '.join(weights)}")
-            weights[key] = float(value)
+            weights[key] = check_number(f"reward_weights[{key!r}]", value, lo=0.0)
+        if not isinstance(randomize, (bool, np.bool_)):
+            raise ValueError(f"randomize = {show(randomize)}: expected True or False")
         self.weights = weights
         self.skins = parse_skins(design, skins)
         self.frame_skip = int(frame_skip)
-        self.squeeze = float(squeeze)
-        self.overload_N = float(overload_N)
-        self.randomize = randomize
+        self.randomize = bool(randomize)
+        directory = calibration_dir or SHIPPED_DIR
+        for skin in sorted({*self.skins.values(), "rigid"}):
+            series_law(skin, str(directory))  # reads and checks the file (cached for apply_skins)
         spec = scene_spec(self.config)
         add_skin_pairs(spec)
         self.model = spec.compile()
-        apply_skins(self.model, self.skins, directory=calibration_dir or SHIPPED_DIR)
+        apply_skins(self.model, self.skins, directory=directory)
         self.data = mujoco.MjData(self.model)
         m = self.model
         self.region_names = tuple(self.skins)
@@ -170,10 +192,17 @@ class HandshakeEnv(gym.Env):
         self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
         self._timeline = Timeline()
         self._script: PartnerScript | None = None
+        self._ended: str | None = None  # why the episode ended ("truncated", "terminated")
 
     # --- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
+        """Start an episode; ``seed`` is None or an integer >= 0, ``options`` None or ``{}``."""
+        if seed is not None and (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool)
+                                 or seed < 0):
+            raise ValueError(f"seed = {show(seed)}: expected None or an integer >= 0")
+        if options is not None and (not isinstance(options, Mapping) or options):
+            raise ValueError(f"options = {show(options)}: this env takes no options (None or {{}})")
+        super().reset(seed=None if seed is None else int(seed))
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         rng = self.np_random
@@ -195,16 +224,29 @@ class HandshakeEnv(gym.Env):
         d.mocap_quat[self._mocap] = quat
         mujoco.mj_forward(m, d)
         self._forces = np.zeros(len(self.region_names))
+        self._ended = None
         return self._obs(), self._info({}, "reach")
 
     def step(self, action):
-        a = np.asarray(action, dtype=np.float64)
+        """Advance one action period; see the class docstring for the action and the outputs."""
+        try:
+            raw = np.asarray(action)
+        except (TypeError, ValueError):  # ragged nested sequences
+            raw = np.asarray(None)
+        if raw.dtype.kind not in "iuf":  # complex, strings, objects, booleans
+            raise ValueError(f"action {show(action)} is outside the action space: 6 finite real "
+                             f"values in [-1, 1] (got dtype {raw.dtype})")
+        a = raw.astype(np.float64, copy=False)
         # min/max are nan when any entry is: one comparison catches both
         if a.shape != (6,) or not (a.min() >= -1.0 - 1e-6 and a.max() <= 1.0 + 1e-6):
+            got = f" (got shape {a.shape})" if a.shape != (6,) else ""
             raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
-                             "space: 6 finite values in [-1, 1]")
+                             f"space: 6 finite values in [-1, 1]{got}")
         if self._script is None:
             raise RuntimeError("call reset() before step()")
+        if self._ended is not None:
+            raise RuntimeError(f"the episode is over ({self._ended} at t = {self.data.time:.3f} "
+                               "s): call reset() before step()")
         m, d, script = self.model, self.data, self._script
         ctrl, opt = self._ctrl, m.opt
         ctrl[self._pro_act] = a * self._max_speed
@@ -242,7 +284,10 @@ class HandshakeEnv(gym.Env):
         info = self._info(terms, phase)
         info["unstable"] = unstable
         obs = self._obs() if not unstable else np.zeros(self.observation_space.shape)
-        return obs, reward, unstable, bool(truncated and not unstable), info
+        truncated = bool(truncated and not unstable)
+        if unstable or truncated:
+            self._ended = "terminated" if unstable else "truncated"
+        return obs, reward, unstable, truncated, info
 
     # --- helpers -----------------------------------------------------------------------------
     def _obs(self) -> np.ndarray:

@@ -81,7 +81,7 @@ def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_")
 
 @functools.lru_cache(maxsize=32)
 def _soft(skin: str, directory: str) -> SoftContactParams:
-    return load_calibration(skin, directory).soft_contact
+    return load_calibration(skin, directory, require=("soft-contact",)).soft_contact
 
 
 @functools.lru_cache(maxsize=32)

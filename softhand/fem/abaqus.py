@@ -1,19 +1,34 @@
-"""Abaqus/Standard input deck of the 3D quarter indentation model that softhand solves.
+"""Abaqus/Standard and CalculiX input decks of the 3D quarter indentation model of softhand.
 
-The deck holds softhand's own mesh (same node and element numbers, plus one), materials and
-loading, so that an Abaqus run can be compared with :func:`softhand.fem.solver.indent`:
+A deck holds softhand's own mesh (same node and element numbers, plus one), materials and
+loading, so that a run of the other solver can be compared with
+:func:`softhand.fem.solver.indent`. One core (mesh, C3D20 connectivity, node sets, sections,
+materials, skin and pocket surfaces) feeds two dialects:
 
-* Nodes are written as they are (Abaqus id = softhand index + 1). Each Lagrange Q27 hexahedron
-  becomes a C3D20H brick (hybrid serendipity; the Q27 face and centre nodes stay as unconnected
-  nodes). The C3D20 order is derived from the element's natural coordinates (below), and each
-  element takes the axis assignment that gives its corner hexahedron a positive volume.
-* Boundary: base y = 0 encastre, x = 0 XSYMM, z = 0 ZSYMM. The force on the whole phalanx is
-  4 x RF2 of ``PLATE_RP``.
-* The plate is an analytical rigid surface (TYPE=CYLINDER) at y = height; frictionless hard
-  contact with the outer skin surface and, for pocket designs, between pocket roof and floor.
-* Materials: Table 3 hyperfoam with MODULI as softhand reads them; Prony terms with k_i = g_i
-  (the paper applies g(t) to the whole stress, and Abaqus requires equal shear and bulk
-  relaxation data for hyperfoam).
+* ``"abaqus"`` (``fmt="inp"``): C3D20H bricks (hybrid, for nu = 0.47-0.49); the plate is an
+  analytical rigid surface (TYPE=CYLINDER) on ``PLATE_RP``; frictionless hard contact; Table 3
+  hyperfoam with MODULI as softhand reads them and Prony terms with k_i = g_i (the paper applies
+  g(t) to the whole stress, and Abaqus requires equal shear and bulk relaxation for hyperfoam);
+  *VISCO ramp and hold.
+* ``"calculix"`` (``fmt="ccx"``, runs unmodified in CalculiX 2.20, ``ccx -i job``): C3D20
+  bricks with full 27-point integration, like softhand's 3x3x3-point Q27 (C3D20R integrates
+  8 points; 2.1 % softer at 0.5 mm on coarse solid-pu); the plate is a grid of C3D8 bricks tied to ``PLATE_RP`` by
+  *RIGID BODY; frictionless face-to-face penalty contact with softhand's own linear law
+  (pressure = ``penalty_N_mm3`` x overclosure); hyperfoam only with elastic *STATIC, because
+  CalculiX has no Prony viscoelasticity for hyperfoam (it ignores *VISCOELASTIC there): the
+  deck reproduces softhand's ``elastic_only=True`` run.
+
+Nodes are written as they are (id = softhand index + 1). Each Lagrange Q27 hexahedron becomes a
+20-node brick (the Q27 face and centre nodes stay as unconnected nodes); the C3D20 order is
+derived from the element's natural coordinates (below), and each element takes the axis
+assignment that gives its corner hexahedron a positive volume. The elements at the base centre
+are collapsed bricks (one face collapsed to a line); both solvers accept them. Boundary: base
+y = 0 fixed, x = 0 and z = 0 symmetry planes. The force on the whole phalanx is -4 x RF2 of
+``PLATE_RP`` (RF2 < 0: the skin pushes the plate up).
+
+Plate travel: Abaqus/Standard cannot end a displacement-controlled step at a force, so the ramp
+goes to a depth that is either given or softhand's own displacement at ``max_force_N`` for the
+same model (:func:`write_deck` runs :func:`indent`); the hold keeps that depth, as softhand does.
 
 Units: mm, N, s, MPa.
 """
@@ -22,23 +37,35 @@ from __future__ import annotations
 
 import itertools
 import os
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
 import softhand
-from softhand.fem.geometry import Design, parse_design
-from softhand.fem.materials import material
+from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
+from softhand.fem.materials import Material, material
 from softhand.fem.mesh import Mesh, build_mesh
-from softhand.fem.solver import IndentationSettings
+from softhand.fem.solver import IndentationSettings, Status, indent
 from softhand.io import atomic_write_text
 
-__all__ = ["C3D20_FACES", "C3D20_NATURAL", "DEFAULT_DEPTH_MM", "ELEMENT_TYPE",
-           "c3d20_connectivity", "corner_volumes", "face_label", "inp_text", "write_inp"]
+__all__ = ["C3D20_FACES", "C3D20_NATURAL", "DIALECTS", "ELEMENT_TYPES", "FORMATS", "DeckInfo",
+           "c3d20_connectivity", "corner_volumes", "face_label", "inp_text", "write_deck",
+           "write_inp"]
 
-ELEMENT_TYPE = "C3D20H"
-DEFAULT_DEPTH_MM = 3.0  # beyond the 2 N point of every design
-PLATE_MARGIN_MM = 2.0  # the plate overhangs the quarter model by this much in x
+Dialect = Literal["abaqus", "calculix"]
+DeckFormat = Literal["inp", "ccx"]
+DIALECTS: tuple[str, ...] = ("abaqus", "calculix")
+#: file format (CLI ``--format``) -> dialect
+FORMATS: dict[str, str] = {"inp": "abaqus", "ccx": "calculix"}
+ELEMENT_TYPES: dict[str, str] = {"abaqus": "C3D20H", "calculix": "C3D20"}
+#: smallest |alpha_i| written. CalculiX's hyperfoam does not converge with sil's alpha_1 = 0.001
+#: (nor 0.01; 0.03 does); in softhand 0.03 instead of 0.001 moves the coarse elastic solid-sil
+#: F(0.5 mm) by -0.03 % and pocket2-sil d(2 N) by +0.02 %.
+MIN_ALPHA: dict[str, float] = {"abaqus": 0.0, "calculix": 0.03}
+PLATE_MARGIN_MM = 2.0  # the plate overhangs the quarter model by this much in x (and z)
 CETOL = 2e-3  # *VISCO creep-strain tolerance (automatic incrementation), about 1% of the strains
 _TOL = 1e-9
 
@@ -148,17 +175,124 @@ def _ids(ids: np.ndarray) -> list[str]:
     return _wrap([str(int(i) + 1) for i in ids], 16)
 
 
-def _material_lines(name: str, s: IndentationSettings) -> list[str]:
-    """*MATERIAL block with the moduli softhand uses for ``name``."""
-    mat = material(name, moduli=s.moduli, elastic_only=s.elastic_only)
+def _comment(text: str) -> list[str]:
+    """``**`` comment lines of at most 100 characters (CalculiX reads 132 per line)."""
+    words, lines, line = text.split(), [], "**"
+    for w in words:
+        if len(line) + 1 + len(w) > 100:
+            lines.append(line)
+            line = "**"
+        line += " " + w
+    return [*lines, line]
+
+
+@dataclass(frozen=True)
+class DeckInfo:
+    """What :func:`write_deck` wrote.
+
+    Attributes:
+        path: the deck file.
+        fmt: ``"inp"`` (Abaqus/Standard) or ``"ccx"`` (CalculiX).
+        depth_mm: plate travel of the ramp step (mm, > 0).
+        depth_source: ``"given"`` (``depth_mm=``) or ``"softhand"`` (softhand's displacement at
+            ``max_force_N`` for the same model, or at ``max_depth_mm`` if it never got there).
+    """
+
+    path: Path
+    fmt: str
+    depth_mm: float
+    depth_source: Literal["given", "softhand"]
+
+
+@dataclass(frozen=True)
+class _Core:
+    """The dialect-independent model: mesh, C3D20 connectivity and the settings as used."""
+
+    design: Design
+    settings: IndentationSettings  # CalculiX: elastic_only=True
+    geom: PhalanxGeometry
+    mesh: Mesh
+    conn: np.ndarray
+    variant: np.ndarray
+
+    @property
+    def used(self) -> np.ndarray:
+        return np.unique(self.conn)
+
+
+def _prepare(design: str | Design, settings: IndentationSettings | None, dialect: str,
+             depth_mm: float | None) -> tuple[_Core, float | None]:
+    """Validate every input (no FE run, no file) and build the mesh core."""
+    if isinstance(design, str):
+        design = parse_design(design)
+    elif not isinstance(design, Design):
+        raise ValueError(f"design = {design!r}: allowed a design name or a Design")
+    s = IndentationSettings() if settings is None else settings
+    if not isinstance(s, IndentationSettings):
+        raise ValueError(f"settings = {s!r}: allowed an IndentationSettings or None")
+    if s.mode != "3d":
+        raise ValueError(f"mode = {s.mode!r}: only the 3D quarter model ('3d') is exportable")
+    if dialect not in DIALECTS:
+        raise ValueError(f"dialect = {dialect!r}: allowed {', '.join(DIALECTS)}")
+    if dialect == "calculix":
+        s = replace(s, elastic_only=True)
+    geom = design.geometry(**s.geometry)
+    depth = None
+    if depth_mm is not None:
+        try:
+            depth = float(depth_mm)
+        except (TypeError, ValueError):
+            depth = float("nan")
+        if not (np.isfinite(depth) and 0.0 < depth < geom.height_mm):
+            raise ValueError(f"depth_mm = {depth_mm!r} is outside the allowed range "
+                             f"(0, {geom.height_mm:g}) mm (finite, below the phalanx height)")
+    mesh = build_mesh(geom, s.mesh_spec, dim=3)
+    conn, variant = c3d20_connectivity(mesh)
+    return _Core(design, s, geom, mesh, conn, variant), depth
+
+
+def _travel(core: _Core, depth: float | None,
+            progress: Callable[[float], None] | None) -> tuple[float, str, str]:
+    """Plate travel, its source and the header sentence saying where it comes from."""
+    if depth is not None:
+        return depth, "given", f"plate travel {depth:.6g} mm: given"
+    s = core.settings
+    res = indent(core.design, replace(s, hold_s=0.0), progress=progress)
+    d = float(res.displacement_mm[-1])
+    if res.status is Status.REACHED_FORCE:
+        note = f"plate travel {d:.6g} mm: softhand's d(F = {s.max_force_N:g} N) for this model"
+    else:
+        note = (f"plate travel {d:.6g} mm: softhand's max_depth_mm (F = {s.max_force_N:g} N not "
+                f"reached: {float(res.force_N[-1]):.4g} N there)")
+    return d, "softhand", note
+
+
+def _material(name: str, s: IndentationSettings) -> Material:
+    return material(name, moduli=s.moduli, elastic_only=s.elastic_only,
+                    constants=s.materials.get(name))
+
+
+def _raised_alphas(core: _Core, dialect: str) -> list[str]:
+    """The materials whose exponents the dialect raises to MIN_ALPHA[dialect] in magnitude."""
+    return [n for n in dict.fromkeys((core.design.inner, core.design.outer))
+            if any(abs(a) < MIN_ALPHA[dialect] for a in _material(n, core.settings).hyperfoam.alpha)]
+
+
+def _material_lines(name: str, s: IndentationSettings, min_alpha: float = 0.0) -> list[str]:
+    """*MATERIAL block with the constants and moduli softhand uses for ``name``.
+
+    Exponents below ``min_alpha`` in magnitude are written as +-``min_alpha``.
+    """
+    mat = _material(name, s)
     law, prony = mat.hyperfoam, mat.prony
-    mu = law.mu  # instantaneous in softhand; back to Table 3's long-term values if so read
+    alpha = [a if abs(a) >= min_alpha else float(np.copysign(min_alpha, a)) for a in law.alpha]
+    mu = law.mu  # instantaneous in softhand; back to the long-term values as given if so read
     head = f"*HYPERFOAM, N={len(mu)}"
     if prony is not None:
         if s.moduli == "long-term":
             mu = tuple(m * prony.long_term_ratio for m in mu)
         head += ", MODULI=" + ("LONG TERM" if s.moduli == "long-term" else "INSTANTANEOUS")
-    data = [_num(v) for pair in zip(mu, law.alpha, strict=True) for v in pair]
+    data = [_num(v) for pair in zip(mu, alpha, strict=True) for v in pair]
     data += [_num(law.nu)] * len(mu)
     lines = [f"*MATERIAL, NAME={name.upper()}", head, *_wrap(data, 8)]
     if prony is not None:
@@ -169,12 +303,77 @@ def _material_lines(name: str, s: IndentationSettings) -> list[str]:
     return lines
 
 
-def _surface(name: str, elements: np.ndarray, label: np.ndarray) -> list[str]:
+def _surface(name: str, elements: np.ndarray, label: np.ndarray | list[str]) -> list[str]:
     return [f"*SURFACE, TYPE=ELEMENT, NAME={name}",
             *(f"{e + 1}, {lab}" for e, lab in zip(elements, label, strict=True))]
 
 
-def _step(name: str, proc: str, period: float, plate: float, *, first: bool) -> list[str]:
+def _header(core: _Core, dialect: str, note: str) -> list[str]:
+    s, version = core.settings, getattr(softhand, "__version__", "0.1.0")
+    solver = "Abaqus/Standard" if dialect == "abaqus" else "CalculiX 2.20 (run: ccx -i JOBNAME)"
+    text = [f"{solver} deck.",
+            "Quarter model: symmetry planes x = 0 and z = 0, base y = 0 fixed. Whole-phalanx "
+            "force = -4 x RF2 of PLATE_RP. Node/element id = softhand index + 1.",
+            f"mesh: {s.mesh}; moduli: {s.moduli}; elastic_only: {s.elastic_only}; speed: "
+            f"{s.speed_mm_s:g} mm/s; hold: {s.hold_s:g} s; max_force_N: {s.max_force_N:g}.",
+            "Q27 face/centre nodes are listed but unconnected (C3D20 uses 20 of the 27)."]
+    if s.geometry:
+        text.append("geometry overrides: " + ", ".join(f"{k} = {v:g}" for k, v in
+                                                        sorted(s.geometry.items())) + ".")
+    for name, constants in sorted(s.materials.items()):
+        text.append(f"material constants of {name}: {constants}.")
+    if dialect == "calculix":
+        text.append("CalculiX has no Prony viscoelasticity for hyperfoam (it silently ignores "
+                    "*VISCOELASTIC there): this deck is hyperfoam only, elastic *STATIC with the "
+                    "moduli as written and no hold. It reproduces softhand's elastic_only=True "
+                    "run, not the viscoelastic one.")
+        for name in _raised_alphas(core, dialect):
+            text.append(f"{name}: |alpha_i| < {MIN_ALPHA[dialect]:g} written as "
+                        f"{MIN_ALPHA[dialect]:g} (CalculiX's hyperfoam does not converge with "
+                        "alpha = 0.001; in softhand the change moves the forces by < 0.05 %).")
+    out = ["*HEADING",
+           f"softhand {version}: plate indentation of {core.design.name}; units mm, N, s, MPa",
+           f"** {note}"]
+    for t in text:
+        out += _comment(t)
+    return out
+
+
+def _body(core: _Core, dialect: str) -> list[str]:
+    """Nodes, skin elements, sets, sections, materials and surfaces: common to both dialects."""
+    mesh, conn, used = core.mesh, core.conn, core.used
+    Xu = mesh.X[used]
+    out = ["*NODE, NSET=SKIN_NODES"]
+    out += [f"{i + 1}, {_num(x)}, {_num(y)}, {_num(z)}" for i, (x, y, z) in enumerate(mesh.X)]
+    out += ["*NODE, NSET=PLATE_RP", f"{mesh.X.shape[0] + 1}, 0., {_num(core.geom.height_mm)}, 0.",
+            *_comment("Elements at the base centre are collapsed bricks (repeated node ids, one "
+                      "face collapsed to a line, i.e. 15-node wedges); the solver accepts them."),
+            f"*ELEMENT, TYPE={ELEMENT_TYPES[dialect]}, ELSET=SKIN"]
+    for e, row in enumerate(conn):
+        ids = [str(e + 1)] + [str(n + 1) for n in row]
+        out += [", ".join(ids[:16]) + ",", ", ".join(ids[16:])]
+    for set_name, lay in (("INNER", 0), ("OUTER", 1)):
+        out += [f"*ELSET, ELSET={set_name}", *_ids(np.flatnonzero(mesh.layer == lay))]
+    for set_name, axis in (("BASE", 1), ("XSYM", 0), ("ZSYM", 2)):
+        out += [f"*NSET, NSET={set_name}", *_ids(used[np.abs(Xu[:, axis]) < _TOL])]
+    d = core.design
+    for set_name, mat in (("INNER", d.inner), ("OUTER", d.outer)):
+        out += [f"*SOLID SECTION, ELSET={set_name}, MATERIAL={mat.upper()}", ","]
+    for name in dict.fromkeys((d.inner, d.outer)):
+        out += _material_lines(name, core.settings, MIN_ALPHA[dialect])
+    # skin surface: xi0 = +1 faces of the outermost elements; pocket: roof underside, floor top
+    labels = {v: (face_label(v, 0, 0), face_label(v, 0, 2)) for v in (0, 1)}
+    outer_el = _face_elements(mesh, mesh.outer_faces, 2)
+    out += _surface("SKIN", outer_el, [labels[v][1] for v in core.variant[outer_el]])
+    if mesh.floor_faces.size:
+        roof_el = _face_elements(mesh, mesh.roof_faces, 0)
+        floor_el = _face_elements(mesh, mesh.floor_faces, 2)
+        out += _surface("ROOF", roof_el, [labels[v][0] for v in core.variant[roof_el]])
+        out += _surface("FLOOR", floor_el, [labels[v][1] for v in core.variant[floor_el]])
+    return out
+
+
+def _abaqus_step(name: str, proc: str, period: float, plate: float, *, first: bool) -> list[str]:
     inc = f"{_num(period / 100)}, {_num(period)}, {_num(period * 1e-6)}, {_num(period / 20)}"
     bc = "*BOUNDARY" if first else "*BOUNDARY, OP=MOD"
     return [f"*STEP, NAME={name}, NLGEOM=YES, INC=10000, AMPLITUDE=RAMP", proc, inc,
@@ -184,110 +383,103 @@ def _step(name: str, proc: str, period: float, plate: float, *, first: bool) -> 
             "*END STEP"]
 
 
-def inp_text(design: str | Design, settings: IndentationSettings | None = None, *,
-             depth_mm: float | None = None) -> str:
-    """The Abaqus/Standard deck of one design's 3D quarter indentation model.
-
-    Args:
-        design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
-        settings: run settings; ``mode`` must be ``"3d"``. Mesh, moduli, elastic_only, speed,
-            hold and geometry overrides are taken from it.
-        depth_mm: plate travel of the ramp step (default :data:`DEFAULT_DEPTH_MM`), > 0.
-
-    Raises:
-        ValueError: unknown design, 2D mode, or a depth that is not finite and > 0.
-    """
-    design = parse_design(design) if isinstance(design, str) else design
-    s = settings or IndentationSettings()
-    if s.mode != "3d":
-        raise ValueError(f"mode = {s.mode!r}: the Abaqus export needs the 3D model ('3d')")
-    try:
-        depth = float(DEFAULT_DEPTH_MM if depth_mm is None else depth_mm)
-    except (TypeError, ValueError):
-        depth = float("nan")
-    if not (np.isfinite(depth) and depth > 0):
-        raise ValueError(f"depth_mm = {depth_mm!r} must be finite and > 0")
-    geom = design.geometry(**s.geometry)
-    mesh = build_mesh(geom, s.mesh_spec, dim=3)
-    conn, variant = c3d20_connectivity(mesh)
-    used = np.unique(conn)
-    Xu = mesh.X[used]
-    rp = mesh.X.shape[0]  # 0-based index of the plate reference node
-    version = getattr(softhand, "__version__", "0.1.0")
-    t_ramp = depth / s.speed_mm_s
-
-    out = ["*HEADING",
-           f"softhand {version}: plate indentation of {design.name}; units mm, N, s, MPa",
-           "** Quarter model: symmetry planes x = 0 (XSYMM) and z = 0 (ZSYMM), base y = 0 "
-           "encastre.",
-           "** Whole-phalanx force = 4 x RF2 of PLATE_RP. Abaqus node/element id = softhand "
-           "index + 1.",
-           f"** mesh: {s.mesh}; moduli: {s.moduli}; elastic_only: {s.elastic_only}",
-           "** Q27 face/centre nodes are listed but unconnected (C3D20 uses 20 of the 27).",
-           "*NODE, NSET=SKIN_NODES"]
-    out += [f"{i + 1}, {_num(x)}, {_num(y)}, {_num(z)}" for i, (x, y, z) in enumerate(mesh.X)]
-    out += ["*NODE, NSET=PLATE_RP", f"{rp + 1}, 0., {_num(geom.height_mm)}, 0.",
-            "** Elements at the base centre are collapsed bricks (repeated node ids, one face",
-            "** collapsed to a line, i.e. 15-node wedges); Abaqus accepts collapsed C3D20 bricks.",
-            f"*ELEMENT, TYPE={ELEMENT_TYPE}, ELSET=SKIN"]
-    for e, row in enumerate(conn):
-        ids = [str(e + 1)] + [str(n + 1) for n in row]
-        out += [", ".join(ids[:16]) + ",", ", ".join(ids[16:])]
-    for set_name, lay in (("INNER", 0), ("OUTER", 1)):
-        out += [f"*ELSET, ELSET={set_name}", *_ids(np.flatnonzero(mesh.layer == lay))]
-    for set_name, axis in (("BASE", 1), ("XSYM", 0), ("ZSYM", 2)):
-        out += [f"*NSET, NSET={set_name}", *_ids(used[np.abs(Xu[:, axis]) < _TOL])]
-    for set_name, mat in (("INNER", design.inner), ("OUTER", design.outer)):
-        out += [f"*SOLID SECTION, ELSET={set_name}, MATERIAL={mat.upper()}", ","]
-    for name in dict.fromkeys((design.inner, design.outer)):
-        out += _material_lines(name, s)
-
-    # skin surface: xi0 = +1 faces of the outermost elements
-    outer_el = _face_elements(mesh, mesh.outer_faces, 2)
-    labels = {v: (face_label(v, 0, 0), face_label(v, 0, 2)) for v in (0, 1)}
-    out += _surface("SKIN", outer_el, np.array([labels[v][1] for v in variant[outer_el]]))
-    a = PLATE_MARGIN_MM
-    h = _num(geom.height_mm)
-    out += ["** Plate: profile in the local (x, y) plane swept along the generator (local z =",
-            "** global Z); local x = global X, so local y = Z x X = global Y. The segment runs",
-            "** towards -x; its normal (segment direction turned 90 deg counterclockwise) is",
-            "** -Y, facing the skin. Covers x in [-margin, width/2 + margin], all z.",
-            "*SURFACE, TYPE=CYLINDER, NAME=PLATE",
-            f"0., {h}, 0., 1., {h}, 0.", f"0., {h}, 1.",
-            f"START, {_num(0.5 * geom.width_mm + a)}, 0.", f"LINE, {_num(-a)}, 0.",
-            "*RIGID BODY, ANALYTICAL SURFACE=PLATE, REF NODE=PLATE_RP",
-            "*SURFACE INTERACTION, NAME=FRICTIONLESS", "*FRICTION", "0.",
-            "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD",
-            "*CONTACT PAIR, INTERACTION=FRICTIONLESS", "SKIN, PLATE"]
-    if mesh.floor_faces.size:
-        roof_el = _face_elements(mesh, mesh.roof_faces, 0)
-        floor_el = _face_elements(mesh, mesh.floor_faces, 2)
-        out += _surface("ROOF", roof_el, np.array([labels[v][0] for v in variant[roof_el]]))
-        out += _surface("FLOOR", floor_el, np.array([labels[v][1] for v in variant[floor_el]]))
+def _abaqus_tail(core: _Core, depth: float) -> list[str]:
+    """Analytical rigid plate, hard frictionless contact, boundary, *VISCO/*STATIC steps."""
+    s, geom = core.settings, core.geom
+    a, h = PLATE_MARGIN_MM, _num(geom.height_mm)
+    out = [*_comment("Plate: profile in the local (x, y) plane swept along the generator (local "
+                     "z = global Z); local x = global X, so local y = Z x X = global Y. The "
+                     "segment runs towards -x; its normal (segment direction turned 90 deg "
+                     "counterclockwise) is -Y, facing the skin. Covers x in [-margin, width/2 + "
+                     "margin], all z."),
+           "*SURFACE, TYPE=CYLINDER, NAME=PLATE",
+           f"0., {h}, 0., 1., {h}, 0.", f"0., {h}, 1.",
+           f"START, {_num(0.5 * geom.width_mm + a)}, 0.", f"LINE, {_num(-a)}, 0.",
+           "*RIGID BODY, ANALYTICAL SURFACE=PLATE, REF NODE=PLATE_RP",
+           "*SURFACE INTERACTION, NAME=FRICTIONLESS", "*FRICTION", "0.",
+           "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD",
+           "*CONTACT PAIR, INTERACTION=FRICTIONLESS", "SKIN, PLATE"]
+    if core.mesh.floor_faces.size:
         out += ["** Pocket closure: roof underside against floor.",
                 "*CONTACT PAIR, INTERACTION=FRICTIONLESS", "ROOF, FLOOR"]
     out += ["*BOUNDARY", "BASE, ENCASTRE", "XSYM, XSYMM", "ZSYM, ZSYMM",
             "PLATE_RP, 1, 1", "PLATE_RP, 3, 6"]
     proc = "*STATIC" if s.elastic_only else f"*VISCO, CETOL={_num(CETOL)}"
     out += [f"** Ramp: plate down {_num(depth)} mm at {_num(s.speed_mm_s)} mm/s."]
-    out += _step("RAMP", proc, t_ramp, -depth, first=True)
+    out += _abaqus_step("RAMP", proc, depth / s.speed_mm_s, -depth, first=True)
     if s.hold_s > 0 and not s.elastic_only:
-        out += [f"** Hold: plate fixed for {_num(s.hold_s)} s."]
-        out += _step("HOLD", proc, s.hold_s, -depth, first=False)
-    return "\n".join(out) + "\n"
+        out += [f"** Hold: plate fixed at {_num(depth)} mm for {_num(s.hold_s)} s."]
+        out += _abaqus_step("HOLD", proc, s.hold_s, -depth, first=False)
+    return out
+
+
+def _render(core: _Core, dialect: str, depth: float, note: str) -> str:
+    if dialect == "abaqus":
+        tail = _abaqus_tail
+    else:  # imported here: softhand.fem.calculix builds on this module's core
+        from softhand.fem.calculix import calculix_tail as tail
+    lines = [*_header(core, dialect, note), *_body(core, dialect), *tail(core, depth)]
+    return "\n".join(lines) + "\n"
+
+
+def inp_text(design: str | Design, settings: IndentationSettings | None = None, *,
+             depth_mm: float | None = None, dialect: Dialect = "abaqus",
+             progress: Callable[[float], None] | None = None) -> str:
+    """The deck of one design's 3D quarter indentation model.
+
+    Args:
+        design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
+        settings: run settings; ``mode`` must be ``"3d"``. Mesh, geometry overrides, material
+            constants, moduli, elastic_only, speed, hold, max_force_N and penalty (CalculiX) are
+            taken from it. CalculiX decks are always elastic (``elastic_only=True``).
+        depth_mm: plate travel of the ramp, in (0, height). None: softhand's displacement at
+            ``max_force_N`` for the same model (runs :func:`indent` without hold).
+        dialect: ``"abaqus"`` or ``"calculix"``.
+        progress: passed to :func:`indent` when it runs.
+
+    Raises:
+        ValueError: unknown design, 2D mode, bad geometry, depth or dialect (before any FE run).
+        ConvergenceError: softhand's run for the plate travel failed.
+    """
+    core, depth = _prepare(design, settings, dialect, depth_mm)
+    depth, _, note = _travel(core, depth, progress)
+    return _render(core, dialect, depth, note)
+
+
+def write_deck(design: str | Design, path: str | os.PathLike,
+               settings: IndentationSettings | None = None, *, fmt: DeckFormat = "inp",
+               depth_mm: float | None = None,
+               progress: Callable[[float], None] | None = None) -> DeckInfo:
+    """Write the Abaqus (``fmt="inp"``) or CalculiX (``fmt="ccx"``) deck atomically.
+
+    Every input is validated and the mesh is built before softhand's run (when ``depth_mm`` is
+    None) and before the file is opened: on error no file is written.
+
+    Args:
+        design, settings, depth_mm, progress: as :func:`inp_text`.
+        path: the deck file (its folder is created); not an existing folder.
+        fmt: ``"inp"`` (Abaqus/Standard) or ``"ccx"`` (CalculiX 2.20).
+
+    Returns:
+        The path, format, plate travel and where the travel comes from.
+
+    Raises:
+        ValueError: bad fmt or path, or as :func:`inp_text`.
+        ConvergenceError: softhand's run for the plate travel failed.
+    """
+    if fmt not in FORMATS:
+        raise ValueError(f"fmt = {fmt!r}: allowed {', '.join(FORMATS)}")
+    target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"path = {str(path)!r} is a folder: allowed a file path")
+    core, depth = _prepare(design, settings, FORMATS[fmt], depth_mm)
+    depth, source, note = _travel(core, depth, progress)
+    atomic_write_text(target, _render(core, FORMATS[fmt], depth, note))
+    return DeckInfo(target, fmt, depth, source)  # type: ignore[arg-type]
 
 
 def write_inp(design: str | Design, path: str | os.PathLike,
               settings: IndentationSettings | None = None, *,
               depth_mm: float | None = None) -> Path:
-    """Write the Abaqus deck of :func:`inp_text` to ``path`` atomically and return the path.
-
-    Everything is validated and built before the file is opened: on error no file is written.
-
-    Raises:
-        ValueError: as :func:`inp_text`.
-    """
-    text = inp_text(design, settings, depth_mm=depth_mm)
-    target = Path(path)
-    atomic_write_text(target, text)
-    return target
+    """The Abaqus deck of :func:`write_deck` (``fmt="inp"``); returns the path."""
+    return write_deck(design, path, settings, fmt="inp", depth_mm=depth_mm).path

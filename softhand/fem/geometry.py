@@ -25,8 +25,9 @@ import numpy as np
 
 from softhand.fem.materials import MATERIAL_NAMES
 from softhand.paper import paper
+from softhand.validate import check_number, show
 
-__all__ = ["DESIGNS", "TOPOLOGIES", "Design", "PhalanxGeometry", "parse_design"]
+__all__ = ["DESIGNS", "GEOMETRY_RANGES", "POCKET_FIELDS", "TOPOLOGIES", "Design", "PhalanxGeometry", "parse_design"]
 
 TOPOLOGIES = ("solid", "pocket1", "pocket2")
 _POCKET_HEIGHT = {"solid": 0.0, "pocket1": 1.0, "pocket2": 2.0}
@@ -43,24 +44,66 @@ def _geometry_defaults() -> dict[str, float]:
 _D = _geometry_defaults()
 
 
+#: Allowed range [low, high] of each field (mm; the exponent has no unit). Each is a physically
+#: sensible phalanx around the paper's (16 x 9 x 10 mm, 0.8 mm outer layer, 1 and 2 mm pockets)
+#: that the structured mesh can build; the relations between fields are checked as well (see
+#: :class:`PhalanxGeometry`).
+GEOMETRY_RANGES: dict[str, tuple[float, float]] = {
+    "width_mm": (12.0, 20.0),  # finger phalanges; at most the indenter's 20 mm width
+    "height_mm": (6.0, 12.0),  # the paper's 9 mm +- 3 mm; >= 6 leaves the bands and a core
+    "length_mm": (5.0, 10.0),  # at most the indenter's 10 mm, which must cover the phalanx
+    "outer_layer_mm": (0.2, 2.0),  # a coating (0.2 mm) to a thick layer; < pocket_roof_mm
+    "profile_exponent": (2.0, 3.0),  # half ellipse to boxy; see PhalanxGeometry
+    "pocket_height_mm": (0.0, 6.0),  # 0: no pocket; else >= MIN_POCKET_MM and under the roof
+    "pocket_roof_mm": (0.5, 3.0),  # skin above the pocket (and the top band of a solid design)
+    "pocket_half_width_mm": (0.5, 9.5),  # inside the side walls (relation below)
+}
+MIN_POCKET_MM = 0.25  # thinnest pocket: thinner is a slit that closes before the ramp starts
+_TOP_BAND_MM = 2.0  # band meshed under the roof of a solid design (or a pocket under 2 mm)
+_CURVATURE_FRACTION = 0.75  # deepest band / smallest radius of curvature (mesh-scan limit)
+_SIDE_WALL_MM = 0.5  # material kept between the pocket's edge and the side of the roof
+
+
 @dataclass(frozen=True)
 class PhalanxGeometry:
     """Dimensions of one synthetic phalanx (mm).
 
+    Each field has an allowed range (:data:`GEOMETRY_RANGES`, given below) and the fields must
+    fit together: ``outer_layer_mm < pocket_roof_mm``; the bands meshed under the surface
+    (roof, pocket or a 2 mm top band, 1 mm floor) plus a 1 mm core fit under ``height_mm``; the
+    pocket's edge keeps 0.5 mm of side wall; the bands stay shallower than 0.75 times the outer
+    profile's smallest radius of curvature (deeper, the offset curves fold and the mesh inverts;
+    0.9 still inverted coarse and fine meshes of boxy sections in a scan of the range corners).
+    Every geometry that passes these checks meshes with det J > 0 at every mesh level (the
+    corners of the ranges are tested in 2D and 3D).
+
     Attributes:
-        width_mm: across the finger (paper: 16).
-        height_mm: base (bone) to the top of the skin (paper: 9).
-        length_mm: along the finger (paper: 10); the indenter (20 x 10) covers it.
-        outer_layer_mm: outer layer thickness (paper: 0.8), in (0, pocket_roof_mm).
-        profile_exponent: superellipse exponent n of the outer profile (unstated; default 2, a
-            half ellipse, the simplest rounded section with the paper's width and height).
-        pocket_height_mm: 0 for the solid design, 1 or 2 for the paper's pockets.
-        pocket_roof_mm: skin thickness above the pocket (unstated; default 1.4 mm: the 0.8 mm
+        width_mm: across the finger (paper: 16), in [12, 20] (at most the indenter's 20 mm).
+        height_mm: base (bone) to the top of the skin (paper: 9), in [6, 12].
+        length_mm: along the finger (paper: 10), in [5, 10]; the indenter (20 x 10) covers it.
+        outer_layer_mm: outer layer thickness (paper: 0.8), in [0.2, 2] and < pocket_roof_mm.
+        profile_exponent: superellipse exponent n of the outer profile, in [2, 3] (unstated;
+            default 2, a half ellipse, the simplest rounded section with the paper's width and
+            height). Below 2 the profile has corners (zero radius of curvature) at the base and the
+            top that no skin band can follow; at 3 the corners of a boxy section are already about
+            as tight as the 3.5 mm or deeper bands allow.
+        pocket_height_mm: 0 for the solid design, 1 or 2 for the paper's pockets; a pocket is in
+            [0.25, height_mm - pocket_roof_mm - 2] (1 mm floor band and 1 mm core below it), and
+            the bands' curvature limit (above) may lower that bound.
+        pocket_roof_mm: skin thickness above the pocket, in [0.5, 3] and at most
+            height_mm - 4 (for a solid design: the band above a 2 mm top band of the mesh)
+            (unstated; default 1.4 mm: the 0.8 mm
             outer layer plus 0.6 mm of inner material, chosen so that pocket2-sil gives the
             paper's 0.39 N at 2 mm on the default 3D mesh (1.35 mm: 0.376 N, 1.4 mm: 0.391 N;
             2.0 mm: ~0.67 N). It is the one paper number used to choose geometry; every other
             number is a prediction).
-        pocket_half_width_mm: half the pocket's span across the finger (unstated; default 5.0 mm).
+        pocket_half_width_mm: half the pocket's span across the finger, in
+            [0.5, width_mm / 2 - pocket_roof_mm - 0.5] (unstated; default 5.0 mm). For a solid
+            design it only places the mesh's contact-zone edge.
+
+    Raises:
+        ValueError: a non-number, non-finite or out-of-range field, or fields that do not fit
+            together, naming the field, its value and the allowed range.
     """
 
     width_mm: float = _D["width"]
@@ -73,49 +116,58 @@ class PhalanxGeometry:
     pocket_half_width_mm: float = 5.0
 
     def __post_init__(self) -> None:
-        for name in ("width_mm", "height_mm", "length_mm", "outer_layer_mm", "pocket_roof_mm",
-                     "pocket_half_width_mm"):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} = {v!r} must be finite and > 0")
-        if not 1.5 <= self.profile_exponent <= 4.0:
+        for name, (lo, hi) in GEOMETRY_RANGES.items():
+            object.__setattr__(self, name, check_number(name, getattr(self, name), lo=lo, hi=hi))
+        roof, outer, h = self.pocket_roof_mm, self.outer_layer_mm, self.pocket_height_mm
+        if outer >= roof:
             raise ValueError(
-                f"profile_exponent = {self.profile_exponent!r} is outside the allowed range [1.5, 4]"
+                f"outer_layer_mm = {outer!r}: must be thinner than pocket_roof_mm = {roof:g} "
+                f"(allowed range [{GEOMETRY_RANGES['outer_layer_mm'][0]:g}, {roof:g}))"
             )
-        part = min(0.5 * self.width_mm, self.height_mm)
-        if self.outer_layer_mm >= part:
-            raise ValueError(
-                f"outer_layer_mm = {self.outer_layer_mm!r} is thicker than the part: allowed range "
-                f"(0, {part:g}) (half width and height bound it)"
-            )
-        if self.outer_layer_mm >= self.pocket_roof_mm:
-            raise ValueError(
-                f"outer_layer_mm = {self.outer_layer_mm!r} must be thinner than the pocket roof / "
-                f"top band: allowed range (0, pocket_roof_mm = {self.pocket_roof_mm:g})"
-            )
-        h_max = self.height_mm - self.pocket_roof_mm - _FLOOR_BAND_MM - _MIN_CORE_MM
-        if not 0.0 <= self.pocket_height_mm <= h_max:
-            raise ValueError(
-                f"pocket_height_mm = {self.pocket_height_mm!r} is taller than the space above the "
-                f"base: allowed range [0, {h_max:g}] (height {self.height_mm:g} - roof "
-                f"{self.pocket_roof_mm:g} - {_FLOOR_BAND_MM + _MIN_CORE_MM:g} mm floor and core)"
-            )
-        depth = self.band_depth_mm
+        below = _FLOOR_BAND_MM + _MIN_CORE_MM
+        if 0.0 < h < MIN_POCKET_MM:
+            raise ValueError(f"pocket_height_mm = {h!r}: expected 0 (no pocket) or a pocket of "
+                             f"at least {MIN_POCKET_MM:g} mm")
+        # the bands under the surface (roof, pocket or a 2 mm top band, floor) must fit over a
+        # core and stay shallower than _CURVATURE_FRACTION x the profile's smallest radius of
+        # curvature
         r_min = self.min_curvature_radius_mm()
-        if depth >= 0.9 * r_min:
+        limit = _CURVATURE_FRACTION * r_min
+        shape = (f"width_mm = {self.width_mm:g}, height_mm = {self.height_mm:g}, "
+                 f"profile_exponent = {self.profile_exponent:g}")
+        shallowest = GEOMETRY_RANGES["pocket_roof_mm"][0] + _TOP_BAND_MM + _FLOOR_BAND_MM
+        curvature = (f"shallower than {_CURVATURE_FRACTION:g} x the profile's smallest radius of "
+                     f"curvature, {r_min:.3g} mm")
+        if shallowest >= limit:
             raise ValueError(
-                f"the meshed skin band is {depth:g} mm deep but the profile's smallest radius of "
-                f"curvature is {r_min:.3g} mm: lower profile_exponent = {self.profile_exponent!r} "
-                f"or pocket_roof_mm = {self.pocket_roof_mm!r} (band depth must stay < "
-                f"{0.9 * r_min:.3g} mm)"
+                f"{shape}: the profile's smallest radius of curvature is {r_min:.3g} mm; the skin "
+                f"bands under the surface (at least {shallowest:g} mm deep) need more than "
+                f"{shallowest / _CURVATURE_FRACTION:.3g} mm (a wider or flatter section, or a "
+                "smaller profile_exponent)"
             )
-        if self.pocket_height_mm > 0:
-            x_max = 0.5 * self.width_mm - self.pocket_roof_mm - 0.5
-            if not 0.5 <= self.pocket_half_width_mm <= x_max:
-                raise ValueError(
-                    f"pocket_half_width_mm = {self.pocket_half_width_mm!r} is outside the allowed "
-                    f"range [0.5, {x_max:g}] (the pocket must stay inside the side walls)"
-                )
+        top_band = max(h, _TOP_BAND_MM)
+        roof_max = min(self.height_mm - top_band - below, limit - top_band - _FLOOR_BAND_MM)
+        if top_band == _TOP_BAND_MM and roof > roof_max:
+            raise ValueError(
+                f"pocket_roof_mm = {roof!r}: allowed range ({outer:g}, {roof_max:.3g}) at {shape} "
+                f"(roof, a {top_band:g} mm pocket or top band and a {_FLOOR_BAND_MM:g} mm floor "
+                f"band fit over a {_MIN_CORE_MM:g} mm core, {curvature})"
+            )
+        h_max = min(self.height_mm - roof - below, limit - roof - _FLOOR_BAND_MM)
+        if h > h_max:
+            raise ValueError(
+                f"pocket_height_mm = {h!r}: allowed range [{MIN_POCKET_MM:g}, {h_max:.3g}) at "
+                f"pocket_roof_mm = {roof:g}, {shape} (the pocket and a {_FLOOR_BAND_MM:g} mm floor "
+                f"band fit over a {_MIN_CORE_MM:g} mm core, {curvature})"
+            )
+        x_max = 0.5 * self.width_mm - roof - _SIDE_WALL_MM
+        if not 0.5 <= self.pocket_half_width_mm <= x_max:
+            raise ValueError(
+                f"pocket_half_width_mm = {self.pocket_half_width_mm!r}: allowed range "
+                f"[0.5, {x_max:g}] at width_mm = {self.width_mm:g} and pocket_roof_mm = {roof:g} "
+                f"(the pocket, or a solid design's contact zone, keeps {_SIDE_WALL_MM:g} mm of side "
+                "wall)"
+            )
 
     @property
     def semi_axes(self) -> tuple[float, float]:
@@ -124,7 +176,7 @@ class PhalanxGeometry:
     @property
     def band_depth_mm(self) -> float:
         """Depth of the offset-band region meshed under the surface (outer, roof, pocket, floor)."""
-        return self.pocket_roof_mm + max(self.pocket_height_mm, 2.0) + _FLOOR_BAND_MM
+        return self.pocket_roof_mm + max(self.pocket_height_mm, _TOP_BAND_MM) + _FLOOR_BAND_MM
 
     @property
     def has_pocket(self) -> bool:
@@ -189,9 +241,43 @@ class Design:
         return self.inner == self.outer
 
     def geometry(self, **overrides: float) -> PhalanxGeometry:
-        """The default geometry of this design, with optional field overrides."""
+        """The default geometry of this design, with optional field overrides.
+
+        A solid design has no pocket: :data:`POCKET_FIELDS` other than their solid defaults are
+        rejected (the run would be labelled with the solid design's name). For a solid design
+        whose width or roof leaves no room for the default 5 mm contact-zone edge
+        (``pocket_half_width_mm``), the edge moves inwards to the largest allowed value.
+
+        Raises:
+            ValueError: an unknown field, a pocket field for a solid design, or a value that
+                :class:`PhalanxGeometry` rejects.
+        """
+        unknown = [k for k in overrides if k not in GEOMETRY_RANGES]
+        if unknown:
+            raise ValueError(f"geometry field {unknown[0]} = {show(overrides[unknown[0]])} is "
+                             f"unknown; allowed: {', '.join(GEOMETRY_RANGES)}")
         base = PhalanxGeometry(pocket_height_mm=_POCKET_HEIGHT[self.topology])
+        if self.topology == "solid":
+            for name in POCKET_FIELDS:
+                if name in overrides and overrides[name] != getattr(base, name):
+                    pocketed = ", ".join(d for d in DESIGNS if not d.startswith("solid"))
+                    raise ValueError(
+                        f"{name} = {show(overrides[name])}: design {self.name} has no pocket; "
+                        f"{' and '.join(POCKET_FIELDS)} apply to the pocket designs ({pocketed})"
+                    )
+            width = overrides.get("width_mm", base.width_mm)
+            roof = overrides.get("pocket_roof_mm", base.pocket_roof_mm)
+            try:
+                edge = float(width) / 2 - float(roof) - _SIDE_WALL_MM
+            except (TypeError, ValueError):
+                edge = base.pocket_half_width_mm  # a bad value: PhalanxGeometry names it
+            if edge < base.pocket_half_width_mm:
+                overrides = {**overrides, "pocket_half_width_mm": max(edge, 0.5)}
         return replace(base, **overrides) if overrides else base
+
+
+#: Fields that describe the pocket: only the pocket designs may change them.
+POCKET_FIELDS = ("pocket_height_mm", "pocket_half_width_mm")
 
 
 _NAME = re.compile(r"^(solid|pocket1|pocket2)-(sil|pu)(?:-(sil|pu))?$")

@@ -42,18 +42,22 @@ Units: MPa (N/mm^2), mm, s.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from softhand.paper import paper
+from softhand.validate import check_mapping, check_number, check_numbers, join, show
 
 __all__ = [
+    "CONSTANT_KEYS",
     "MATERIAL_NAMES",
     "Hyperfoam",
     "Material",
     "Prony",
     "ViscoState",
+    "check_constants",
+    "check_materials",
     "material",
     "phi1",
     "phi2",
@@ -364,6 +368,85 @@ class Material:
         return S, factor * D0, ViscoState(S0, H)
 
 
+CONSTANT_KEYS = ("nu", "mu_MPa", "alpha", "g", "tau_s")
+NU_RANGE = (0.0, 0.5)  # open: the skins are compressible elastomers with a positive Poisson ratio
+ALPHA_MIN = 1e-12  # smallest |alpha_i|; the alpha -> 0 limit is the Hencky energy
+
+
+def check_constants(name: str, constants: Any, *, key: str | None = None) -> dict[str, Any]:
+    """Table 3 row of ``name`` with user ``constants`` merged in, every value checked.
+
+    Allowed (the law needs them to be a stable, relaxing solid):
+
+    * ``nu``: a number in (0, 0.5) (the skins' 0.47-0.49; the hyperfoam law itself would take
+      (-1, 0.5));
+    * ``mu_MPa``: a list of N numbers > 0, N >= 1 (N = Table 3's 2, or the length of ``alpha``);
+    * ``alpha``: a list of N finite non-zero numbers, ``|alpha_i| >= 1e-12``;
+    * ``g``: a list of K numbers in [0, 1) with sum < 1 (K >= 0; K = Table 3's 3, or the length of
+      ``tau_s``);
+    * ``tau_s``: a list of K numbers > 0 (s).
+
+    Args:
+        name: ``sil`` or ``pu``.
+        constants: a mapping of some of the keys above, or None.
+        key: key path of ``constants`` in messages (default ``name``).
+
+    Raises:
+        ValueError: ``"{key}.{field} = {value}: expected ..."`` for the first bad value.
+    """
+    key = name if key is None else key
+    if name not in MATERIAL_NAMES:
+        raise ValueError(f"material {name!r} is unknown; allowed: {', '.join(MATERIAL_NAMES)}")
+    row = {k: paper()["materials"][name][k] for k in CONSTANT_KEYS}
+    if constants is None:
+        return row
+    check_mapping(key, constants, optional=CONSTANT_KEYS)
+    given = dict(constants)
+    if "nu" in given:
+        row["nu"] = check_number(join(key, "nu"), given["nu"], lo=NU_RANGE[0], hi=NU_RANGE[1],
+                                 lo_open=True, hi_open=True)
+    for a, b, lo, lo_open, n_min in (("mu_MPa", "alpha", 0.0, True, 1), ("g", "tau_s", 0.0, False, 0),
+                                     ("tau_s", "g", 0.0, True, 0), ("alpha", "mu_MPa", None, False, 1)):
+        if a not in given:
+            continue
+        partner = given.get(b, row[b])
+        n = len(partner) if isinstance(partner, (list, tuple)) else len(row[b])
+        if n < n_min:
+            n = None
+        why = f"(as many as {join(key, b)})" if b in given else f"(as many as Table 3's {b})"
+        hi = 1.0 if a == "g" else None
+        row[a] = check_numbers(join(key, a), given[a], length=n, min_length=n_min, lo=lo, hi=hi,
+                               lo_open=lo_open, hi_open=True, why=why)
+    for k, v in enumerate(row["alpha"]):
+        if abs(v) < ALPHA_MIN:
+            raise ValueError(f"{join(key, 'alpha')}[{k}] = {v!r}: expected a finite non-zero "
+                             f"number (|alpha| >= {ALPHA_MIN:g}); the alpha -> 0 limit is the "
+                             "Hencky energy, use a small value such as 1e-6")
+    if sum(row["g"]) >= 1.0:
+        raise ValueError(f"{join(key, 'g')} = {show(list(row['g']))}: the sum {sum(row['g']):.6g} "
+                         "must be < 1 (allowed range [0, 1): the long-term modulus stays > 0)")
+    return row
+
+
+def check_materials(data: Any, *, key: str = "") -> dict[str, dict[str, Any]]:
+    """Check a whole ``--materials`` object: material name -> constants (see :func:`check_constants`).
+
+    Args:
+        data: the parsed JSON; its top level must be an object keyed by ``sil`` and/or ``pu``.
+        key: key path of ``data`` in messages (``""``: the file's top level).
+
+    Returns:
+        The constants as given, for :class:`~softhand.fem.solver.IndentationSettings`.
+
+    Raises:
+        ValueError: the first bad key or value, named.
+    """
+    check_mapping(key, data, optional=MATERIAL_NAMES)
+    for name, constants in data.items():
+        check_constants(name, constants, key=join(key, name))
+    return dict(data)
+
+
 def material(
     name: str,
     *,
@@ -379,19 +462,17 @@ def material(
             mu / (1 - sum g)) or ``"instantaneous"`` (t = 0+).
         elastic_only: drop the Prony series and keep the law at the moduli as written.
         constants: replaces Table 3 for this material; keys ``nu``, ``mu_MPa``, ``alpha``,
-            ``g``, ``tau_s`` (missing keys keep the Table 3 value).
+            ``g``, ``tau_s`` (missing keys keep the Table 3 value); allowed values: see
+            :func:`check_constants`.
+
+    Raises:
+        ValueError: an unknown name or moduli, or a bad constant (``"sil.nu = 0.7: ..."``).
     """
     if name not in MATERIAL_NAMES:
         raise ValueError(f"material {name!r} is unknown; allowed: {', '.join(MATERIAL_NAMES)}")
     if moduli not in ("long-term", "instantaneous"):
         raise ValueError(f"moduli = {moduli!r} is not allowed; use 'long-term' or 'instantaneous'")
-    row = dict(paper()["materials"][name])
-    if constants:
-        unknown = set(constants) - {"nu", "mu_MPa", "alpha", "g", "tau_s"}
-        if unknown:
-            raise ValueError(f"material constants {sorted(unknown)} for {name!r} are unknown; "
-                             "allowed: nu, mu_MPa, alpha, g, tau_s")
-        row.update(constants)
+    row = check_constants(name, constants)
     law = Hyperfoam(tuple(row["mu_MPa"]), tuple(row["alpha"]), float(row["nu"]))
     if elastic_only:
         return Material(name, law, None, moduli)

@@ -131,11 +131,8 @@ class IndentationSettings:
         if self.force_step_N is not None and not self.force_step_N > 0:
             raise ValueError(f"force_step_N = {self.force_step_N!r} must be > 0")
         for name in self.materials:  # every constant, Prony terms too, even if elastic_only
-            try:
-                material(name, moduli=self.moduli, elastic_only=False,
-                         constants=self.materials.get(name))
-            except ValueError as exc:
-                raise ValueError(f"materials[{name!r}]: {exc}") from None
+            material(name, moduli=self.moduli, elastic_only=False,
+                     constants=self.materials.get(name))
         unknown = set(self.geometry) - set(PhalanxGeometry.__dataclass_fields__)
         if unknown:
             raise ValueError(f"geometry fields {sorted(unknown)} are unknown; allowed: "

@@ -13,8 +13,18 @@ from dataclasses import dataclass, field
 
 from softhand.hands import constants as const
 from softhand.paper import paper
+from softhand.validate import check_number
 
-__all__ = ["HandConfig", "PartnerConfig", "ProstheticConfig", "SceneConfig"]
+__all__ = ["TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "ProstheticConfig", "SceneConfig"]
+
+#: Allowed simulation timestep of the handshake scene, closed interval (s). The skins were
+#: calibrated and are tested at 0.5-2 ms (``softhand.skin.rig.CHECKED_TIMESTEPS_S``; the env tests
+#: run 0.5, 1 and 2 ms); outside that band, inside this range, every skin pair warns
+#: (``SkinRangeWarning``). 5 ms: the rig's impact and overload test stays bounded there and a
+#: handshake with each controller stays finite, but its forces are not checked against 0.5 ms.
+#: 0.1 ms: five times finer than the reference step; an episode precomputes one mount target per
+#: physics step (36,300 at 0.1 ms, under 1 MB), so a smaller step would grow without bound.
+TIMESTEP_RANGE_S = (1e-4, 5e-3)
 
 
 def _paper_mm(key: str) -> float:
@@ -162,8 +172,10 @@ class SceneConfig:
     Attributes:
         prosthetic: the prosthetic hand.
         partner: the partner's hand.
-        timestep_s: simulation time step (s). Default 2 ms: the handshake's region forces agree
-            with 0.5 ms within a few percent (``softhand bench handshake``) at 1.8x the speed of 1 ms.
+        timestep_s: simulation time step (s), in [0.0001, 0.005] (:data:`TIMESTEP_RANGE_S`; the
+            skins are calibrated and tested at 0.0005-0.002 and warn outside it). Default 2 ms: the
+            handshake's region forces agree with 0.5 ms within a few percent (``softhand bench
+            handshake``) at 1.8x the speed of 1 ms.
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
         prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
         crossing_angle_deg: angle between the two hands' long axes in the plane of the touching
@@ -192,7 +204,8 @@ class SceneConfig:
     partner_start_offset_m: tuple[float, float, float] = (-0.15, 0.0, 0.10)
 
     def __post_init__(self) -> None:
-        _check("timestep_s", self.timestep_s, 0.0, 0.01, "s")
+        check_number("timestep_s", self.timestep_s, lo=TIMESTEP_RANGE_S[0], hi=TIMESTEP_RANGE_S[1],
+                     why="s (skins calibrated at 0.0005-0.002 s)")
         _check("gravity_m_s2", self.gravity_m_s2, -1e-12, 100.0, "m/s^2")
         _check("crossing_angle_deg", self.crossing_angle_deg, -1e-12, 90.0 + 1e-12, "deg")
         for name in ("prosthetic_wrist_pos_m", "partner_contact_offset_m", "partner_start_offset_m"):

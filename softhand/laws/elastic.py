@@ -15,9 +15,12 @@ last knot the law continues with its end stiffness (a straight line); below zero
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import BSpline
+
+from softhand.validate import check_mapping, check_numbers, join
 
 __all__ = ["ElasticLaw", "basis_matrix", "knot_vector"]
 
@@ -118,8 +121,26 @@ class ElasticLaw:
         return {"knots_mm": self.knots.tolist(), "coefficients_N_per_mm": self.coefficients.tolist()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> ElasticLaw:
-        return cls(np.asarray(d["knots_mm"]), np.asarray(d["coefficients_N_per_mm"]))
+    def from_dict(cls, d: Any, *, key: str = "elastic") -> ElasticLaw:
+        """Parse :meth:`to_dict` output, checking every value.
+
+        Args:
+            d: mapping with ``knots_mm`` (>= 4 numbers, from 0, not decreasing) and
+                ``coefficients_N_per_mm`` (``len(knots) - 3`` numbers >= 0).
+            key: key path of ``d`` in messages.
+
+        Raises:
+            ValueError: ``"{key}.knots_mm[2] = 'x': expected a finite number"`` and the like.
+        """
+        check_mapping(key, d, required=("knots_mm", "coefficients_N_per_mm"))
+        knots = check_numbers(join(key, "knots_mm"), d["knots_mm"], min_length=_DEGREE + 2, lo=0.0)
+        coef = check_numbers(join(key, "coefficients_N_per_mm"), d["coefficients_N_per_mm"],
+                             length=len(knots) - _DEGREE - 1, lo=0.0,
+                             why=f"(len(knots_mm) - {_DEGREE + 1})")
+        try:
+            return cls(np.asarray(knots), np.asarray(coef))
+        except ValueError as exc:
+            raise ValueError(f"{key}: {exc}") from None
 
     @classmethod
     def fit(cls, delta_mm, force_N, *, n_basis: int = 10, max_mm: float | None = None

@@ -12,14 +12,16 @@ import csv
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares, nnls
 
 from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector
 from softhand.laws.qlv import Prony, qlv_force, qlv_response_matrix
+from softhand.validate import check_mapping, check_number, join, show
 
-__all__ = ["Curve", "CurveError", "SkinLaw", "curve_errors", "fit_skin_law", "load_curve",
+__all__ = ["CURVE_COLUMNS", "Curve", "CurveError", "SkinLaw", "curve_errors", "fit_skin_law", "load_curve",
            "paired_arrays"]
 
 REFERENCE_FORCE_N = 2.0
@@ -96,20 +98,88 @@ class Curve:
         return float(self.displacement_mm[i] / self.time_s[i])
 
 
+def _text_hash(text: str) -> str:
+    """SHA-256 of the text with universal newlines (as ``Path.read_text`` reads it)."""
+    return hashlib.sha256(text.replace("\r\n", "\n").replace("\r", "\n").encode()).hexdigest()
+
+
+CURVE_COLUMNS = ("time_s", "displacement_mm", "force_N", "hold")
+
+
 def load_curve(path: str | Path, label: str | None = None) -> Curve:
-    """Read a curve CSV written by the FE stage (time_s, displacement_mm, force_N, hold)."""
+    """Read a curve CSV written by the FE stage (time_s, displacement_mm, force_N, hold).
+
+    The file is checked line by line before a curve is made: UTF-8 text, a header naming the four
+    columns (in any order), then rows of four finite numbers with ``hold`` 0 or 1 and time
+    strictly increasing from 0; at least 3 rows.
+
+    Raises:
+        ValueError: ``"{path}: line {n}, column {name}: ..."`` for the first bad cell (or the
+            file-level problem: unreadable, empty, not UTF-8, a bad header or too few rows).
+    """
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
-    rows = list(csv.DictReader(text.splitlines()))
-    need = {"time_s", "displacement_mm", "force_N", "hold"}
-    if not rows or not need <= set(rows[0]):
-        raise ValueError(f"{p}: expected columns {sorted(need)}")
     try:
-        cols = {k: np.array([float(r[k]) for r in rows]) for k in need}
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise ValueError(f"{p}: cannot read the curve file ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise ValueError(f"{p}: line {line}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at "
+                         f"offset {exc.start})") from None
+    lines = text.splitlines()
+    if not lines or not text.strip():
+        raise ValueError(f"{p}: the file is empty; expected the header {','.join(CURVE_COLUMNS)} "
+                         "and rows of numbers")
+    header = [h.strip() for h in next(csv.reader([lines[0]]))]
+    if sorted(header) != sorted(CURVE_COLUMNS):
+        missing = [c for c in CURVE_COLUMNS if c not in header]
+        extra = [h for h in header if h not in CURVE_COLUMNS]
+        what = (f"missing {', '.join(missing)}" if missing else "") + (
+            ("; " if missing and extra else "") + (f"unknown {', '.join(map(repr, extra))}"
+                                                   if extra else ""))
+        if not what:
+            what = "a column appears twice"
+        raise ValueError(f"{p}: line 1: header {lines[0]!r} is not the FE curve header "
+                         f"{','.join(CURVE_COLUMNS)} ({what})")
+    cols: dict[str, list[float]] = {c: [] for c in CURVE_COLUMNS}
+    last_t = None
+    for n, cells in enumerate(csv.reader(lines[1:]), start=2):
+        if not cells or all(not c.strip() for c in cells):
+            if n == len(lines):  # a blank last line
+                break
+            raise ValueError(f"{p}: line {n}: empty row inside the file")
+        if len(cells) != len(header):
+            raise ValueError(f"{p}: line {n}: {len(cells)} cells {','.join(cells)!r}, expected "
+                             f"{len(header)} ({','.join(header)}): truncated or malformed row")
+        for name, cell in zip(header, cells, strict=True):
+            where = f"{p}: line {n}, column {name}"
+            try:
+                v = float(cell)
+            except ValueError:
+                raise ValueError(f"{where}: {cell!r} is not a number") from None
+            if not np.isfinite(v):
+                raise ValueError(f"{where}: {cell.strip()!r}: expected a finite number")
+            if name == "hold" and v not in (0.0, 1.0):
+                raise ValueError(f"{where}: {cell.strip()!r}: expected 0 (ramp) or 1 (hold)")
+            if name == "time_s":
+                if last_t is None and v != 0.0:
+                    raise ValueError(f"{where}: {cell.strip()!r}: the first time must be 0")
+                if last_t is not None and not v > last_t:
+                    raise ValueError(f"{where}: {cell.strip()!r}: time must increase (previous "
+                                     f"row {last_t!r})")
+                last_t = v
+            cols[name].append(v)
+    rows = len(cols["time_s"])
+    if rows < 3:
+        raise ValueError(f"{p}: {rows} data rows; at least 3 are needed")
+    try:
+        return Curve(np.array(cols["time_s"]), np.array(cols["displacement_mm"]),
+                     np.array(cols["force_N"]), np.array(cols["hold"]) > 0.5,
+                     label=label or p.stem, sha256=_text_hash(text))
     except ValueError as exc:
         raise ValueError(f"{p}: {exc}") from None
-    return Curve(cols["time_s"], cols["displacement_mm"], cols["force_N"], cols["hold"] > 0.5,
-                 label=label or p.stem, sha256=hashlib.sha256(text.encode()).hexdigest())
 
 
 @dataclass(frozen=True)
@@ -124,6 +194,18 @@ class CurveError:
     def to_dict(self) -> dict:
         return {"label": self.label, "rms_pct_of_2N": self.rms_pct_of_2N,
                 "max_pct_of_2N": self.max_pct_of_2N, "hold_max_pct": self.hold_max_pct}
+
+    @classmethod
+    def from_dict(cls, d: Any, *, key: str = "error") -> CurveError:
+        """Parse :meth:`to_dict` output: a string label and three errors >= 0 (hold: or null)."""
+        names = ("label", "rms_pct_of_2N", "max_pct_of_2N", "hold_max_pct")
+        check_mapping(key, d, required=names)
+        if not isinstance(d["label"], str):
+            raise ValueError(f"{join(key, 'label')} = {show(d['label'])}: expected a string")
+        hold = d["hold_max_pct"]
+        return cls(d["label"], check_number(join(key, "rms_pct_of_2N"), d["rms_pct_of_2N"], lo=0.0),
+                   check_number(join(key, "max_pct_of_2N"), d["max_pct_of_2N"], lo=0.0),
+                   None if hold is None else check_number(join(key, "hold_max_pct"), hold, lo=0.0))
 
 
 @dataclass(frozen=True)
@@ -171,10 +253,35 @@ class SkinLaw:
                 "validated": [e.to_dict() for e in self.validated], "source": self.source}
 
     @classmethod
-    def from_dict(cls, d: dict) -> SkinLaw:
-        errs = lambda key: tuple(CurveError(**e) for e in d.get(key, []))  # noqa: E731
-        return cls(d["name"], ElasticLaw.from_dict(d["elastic"]), Prony.from_dict(d["prony"]),
-                   errs("fitted"), errs("validated"), d.get("source", {}))
+    def from_dict(cls, d: Any, *, key: str = "law") -> SkinLaw:
+        """Parse :meth:`to_dict` output, checking every value (eagerly, here).
+
+        Args:
+            d: mapping with ``name`` (a string), ``elastic`` (:meth:`ElasticLaw.from_dict`),
+                ``prony`` (:meth:`Prony.from_dict`) and optionally ``fitted`` / ``validated``
+                (lists of :class:`CurveError` records) and ``source`` (an object).
+            key: key path of ``d`` in messages.
+
+        Raises:
+            ValueError: naming the key path, e.g. ``"law.prony.g[0] = 'x': expected ..."``.
+        """
+        check_mapping(key, d, required=("name", "elastic", "prony"),
+                      optional=("fitted", "validated", "source"))
+        if not isinstance(d["name"], str):
+            raise ValueError(f"{join(key, 'name')} = {show(d['name'])}: expected a string")
+        errors = {}
+        for part in ("fitted", "validated"):
+            items = d.get(part, [])
+            if not isinstance(items, list):
+                raise ValueError(f"{join(key, part)} = {show(items)}: expected a list of error "
+                                 "records")
+            errors[part] = tuple(CurveError.from_dict(e, key=join(join(key, part), i))
+                                 for i, e in enumerate(items))
+        source = d.get("source", {})
+        check_mapping(join(key, "source"), source, optional=None)
+        return cls(d["name"], ElasticLaw.from_dict(d["elastic"], key=join(key, "elastic")),
+                   Prony.from_dict(d["prony"], key=join(key, "prony")),
+                   errors["fitted"], errors["validated"], dict(source))
 
 
 def curve_errors(law: SkinLaw, curve: Curve) -> CurveError:

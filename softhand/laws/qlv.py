@@ -20,8 +20,11 @@ Prony update):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from softhand.validate import check_mapping, check_number, check_numbers, join, show
 
 __all__ = ["Prony", "qlv_force", "qlv_response_matrix"]
 
@@ -70,8 +73,30 @@ class Prony:
         return {"g": list(self.g), "tau_s": list(self.tau_s), "g_inf": self.g_inf}
 
     @classmethod
-    def from_dict(cls, d: dict) -> Prony:
-        return cls(tuple(d["g"]), tuple(d["tau_s"]))
+    def from_dict(cls, d: Any, *, key: str = "prony") -> Prony:
+        """Parse :meth:`to_dict` output, checking every value.
+
+        Args:
+            d: mapping with ``g`` (numbers in [0, 1), sum < 1), ``tau_s`` (as many numbers > 0)
+                and optionally ``g_inf`` (must equal 1 - sum(g) within 1e-6).
+            key: key path of ``d`` in messages.
+
+        Raises:
+            ValueError: ``"{key}.tau_s[0] = -1.0: expected a finite number > 0"`` and the like.
+        """
+        check_mapping(key, d, required=("g", "tau_s"), optional=("g_inf",))
+        g = check_numbers(join(key, "g"), d["g"], lo=0.0, hi=1.0, hi_open=True)
+        tau = check_numbers(join(key, "tau_s"), d["tau_s"], length=len(g), lo=0.0, lo_open=True,
+                            why=f"(as many as {join(key, 'g')})")
+        if sum(g) >= 1:
+            raise ValueError(f"{join(key, 'g')} = {show(list(g))}: the sum {sum(g):.6g} must be "
+                             "< 1 (g_inf > 0)")
+        if "g_inf" in d:
+            g_inf = check_number(join(key, "g_inf"), d["g_inf"], lo=0.0, hi=1.0, lo_open=True)
+            if abs(g_inf - (1.0 - sum(g))) > 1e-6:
+                raise ValueError(f"{join(key, 'g_inf')} = {show(d['g_inf'])}: expected "
+                                 f"1 - sum(g) = {1.0 - sum(g):.9g}")
+        return cls(g, tau)
 
 
 def _weights(prony: Prony, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

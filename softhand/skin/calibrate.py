@@ -38,6 +38,7 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law, load_curve
 from softhand.skin.pad import PadParams
 from softhand.skin.rig import RigSettings, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
+from softhand.validate import check_mapping, check_number, check_numbers, join, show
 
 __all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
            "calibrate_design", "calibrate_skin", "fe_curves", "hold_error", "law_curve",
@@ -94,15 +95,30 @@ class SkinCalibration:
     law: SkinLaw
     representations: dict[str, RepresentationResult]
     provenance: dict[str, Any]
+    _parsed: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def _representation(self, name: str) -> RepresentationResult:
+        if name not in self.representations:
+            have = ", ".join(self.representations) or "none"
+            raise ValueError(f"skin {self.design}: representation {name!r} is not calibrated "
+                             f"(calibrated: {have}); run `softhand calibrate {self.design}`")
+        return self.representations[name]
 
     @property
     def soft_contact(self) -> SoftContactParams:
-        return SoftContactParams.from_dict(self.representations["soft-contact"].params)
+        """The ``soft-contact`` parameters (ValueError naming the skin if not calibrated)."""
+        if "soft-contact" not in self._parsed:
+            params = self._representation("soft-contact").params
+            self._parsed["soft-contact"] = SoftContactParams.from_dict(params)
+        return self._parsed["soft-contact"]
 
     @property
     def pad(self) -> PadParams:
-        return PadParams.from_dict(self.representations["soft-contact+relaxation"].params,
-                                   self.law)
+        """The ``soft-contact+relaxation`` pad (ValueError naming the skin if not calibrated)."""
+        if "soft-contact+relaxation" not in self._parsed:
+            params = self._representation("soft-contact+relaxation").params
+            self._parsed["soft-contact+relaxation"] = PadParams.from_dict(params, self.law)
+        return self._parsed["soft-contact+relaxation"]
 
     def to_dict(self) -> dict:
         return {"format_version": FORMAT_VERSION, "design": self.design,
@@ -111,24 +127,98 @@ class SkinCalibration:
                 "provenance": self.provenance}
 
     @classmethod
-    def from_dict(cls, d: dict, *, source: str = "calibration") -> SkinCalibration:
-        version = d.get("format_version")
-        if version != FORMAT_VERSION:
-            raise ValueError(f"{source}: format_version {version!r} is not {FORMAT_VERSION} "
-                             "(written by another softhand version): run `softhand calibrate`")
+    def from_dict(cls, d: Any, *, source: str = "calibration", skin: str | None = None,
+                  require: tuple[str, ...] = ()) -> SkinCalibration:
+        """Parse :meth:`to_dict` output, checking every value now (not on first use).
+
+        Args:
+            d: the parsed JSON.
+            source: where it came from (a file path), first in every message.
+            skin: the skin the caller asked for; ``design`` must match it.
+            require: representations that must be present (the handshake needs
+                ``soft-contact``).
+
+        Raises:
+            ValueError: ``"{source}: skin {skin}: {key path} = {value}: expected ..."``.
+        """
+        name = skin or (d.get("design") if isinstance(d, dict) and isinstance(d.get("design"), str)
+                        else "?")
         try:
-            law = SkinLaw.from_dict(d["law"])
-            reps = {}
-            for name, r in d["representations"].items():
-                keys = {"representation", "params", "rms_error_pct_of_2N", "max_error_pct_of_2N",
-                        "mass_sensitivity_pct", "relaxation_error_pct", "step_us", "fit_s"}
-                reps[name] = RepresentationResult(**{k: r[k] for k in keys},
-                                                  extra={k: v for k, v in r.items()
-                                                         if k not in keys})
-            return cls(d["design"], law, reps, d.get("provenance", {}))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ValueError(f"{source}: malformed calibration ({type(exc).__name__}: {exc})"
-                             ) from None
+            check_mapping("", d, required=("format_version", "design", "law", "representations"),
+                          optional=("provenance",))
+            version = d["format_version"]
+            if version != FORMAT_VERSION or isinstance(version, bool):
+                raise ValueError(f"format_version {version!r} is not {FORMAT_VERSION} (written by "
+                                 "another softhand version): run `softhand calibrate`")
+            if not isinstance(d["design"], str) or (skin is not None and d["design"] != skin):
+                want = f"{skin!r} (the file's skin)" if skin is not None else "a string"
+                raise ValueError(f"design = {show(d['design'])}: expected {want}")
+            law = SkinLaw.from_dict(d["law"], key="law")
+            reps_in = check_mapping("representations", d["representations"],
+                                    optional=REPRESENTATIONS)
+            for rep in require:
+                if rep not in reps_in:
+                    raise ValueError(f"representations.{rep}: missing (needed here; calibrated: "
+                                     f"{', '.join(reps_in) or 'none'}): run `softhand calibrate "
+                                     f"{name}`")
+            reps, parsed = {}, {}
+            for rep, r in reps_in.items():
+                reps[rep], value = _parse_representation(rep, r, law, join("representations", rep))
+                if value is not None:
+                    parsed[rep] = value
+            provenance = d.get("provenance", {})
+            check_mapping("provenance", provenance, optional=None)
+            return cls(d["design"], law, reps, dict(provenance), parsed)
+        except ValueError as exc:
+            raise ValueError(f"{source}: skin {name}: {exc}") from None
+
+
+REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
+_RESULT_NUMBERS = ("rms_error_pct_of_2N", "max_error_pct_of_2N", "step_us", "fit_s")
+_RESULT_OPTIONAL = ("mass_sensitivity_pct", "relaxation_error_pct")
+
+
+def _parse_representation(rep: str, r: Any, law: SkinLaw, key: str
+                          ) -> tuple[RepresentationResult, Any]:
+    """One calibrated representation, every value checked; and its parsed parameters."""
+    names = ("representation", "params", *_RESULT_NUMBERS, *_RESULT_OPTIONAL)
+    check_mapping(key, r, required=names, optional=None)
+    if r["representation"] != rep:
+        raise ValueError(f"{join(key, 'representation')} = {show(r['representation'])}: "
+                         f"expected {rep!r}")
+    numbers = {k: check_number(join(key, k), r[k], lo=0.0) for k in _RESULT_NUMBERS}
+    optional = {k: None if r[k] is None else check_number(join(key, k), r[k], lo=0.0)
+                for k in _RESULT_OPTIONAL}
+    pkey = join(key, "params")
+    params = check_mapping(pkey, r["params"], optional=None)
+    value: Any = None
+    if rep == "soft-contact":
+        value = SoftContactParams.from_dict(params, key=pkey)
+    elif rep == "soft-contact+relaxation":
+        value = PadParams.from_dict(params, law, key=pkey)
+    elif rep == "rigid":
+        check_mapping(pkey, params, required=("solref", "solimp"))
+        check_numbers(join(pkey, "solref"), params["solref"], length=2)
+        check_numbers(join(pkey, "solimp"), params["solimp"], length=5)
+    else:  # flex
+        from dataclasses import fields
+
+        from softhand.skin.flex import FlexPadParams
+
+        check_mapping(pkey, params, optional=[f.name for f in fields(FlexPadParams)])
+        for k, v in params.items():
+            if k != "material":
+                check_number(join(pkey, k), v)
+        try:
+            value = FlexPadParams(**params)
+        except ValueError as exc:
+            raise ValueError(f"{pkey}: {exc}") from None
+    extra = {k: v for k, v in r.items() if k not in names}
+    result = RepresentationResult(rep, dict(params), numbers["rms_error_pct_of_2N"],
+                                  numbers["max_error_pct_of_2N"], optional["mass_sensitivity_pct"],
+                                  optional["relaxation_error_pct"], numbers["step_us"],
+                                  numbers["fit_s"], extra)
+    return result, value if rep != "flex" else None
 
 
 def _ramp(curve: Curve) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -26,8 +26,19 @@ def save_calibration(cal: SkinCalibration, out_dir: str | Path = SHIPPED_DIR) ->
     return path
 
 
-def load_calibration(design: str, directory: str | Path = SHIPPED_DIR) -> SkinCalibration:
-    """Read one skin's calibration; clear errors for a missing, corrupt or foreign file."""
+def load_calibration(design: str, directory: str | Path = SHIPPED_DIR, *,
+                     require: tuple[str, ...] = ()) -> SkinCalibration:
+    """Read one skin's calibration, checking every value; clear errors for a bad file.
+
+    Args:
+        design: the skin (file ``{design}.json``).
+        directory: folder of the calibration files.
+        require: representations the caller needs (e.g. ``("soft-contact",)``).
+
+    Raises:
+        ValueError: a missing, unreadable, corrupt or foreign file, or a bad value:
+            ``"{path}: skin {design}: {key path} = {value}: expected ..."``.
+    """
     path = Path(directory) / f"{design}.json"
     if not path.exists():
         known = ", ".join(shipped_skins(directory)) or "none"
@@ -36,10 +47,12 @@ def load_calibration(design: str, directory: str | Path = SHIPPED_DIR) -> SkinCa
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable calibration file ({exc})") from None
+        raise ValueError(f"{path}: skin {design}: not a readable calibration file ({exc})"
+                         ) from None
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: not a calibration file (top level is {type(data).__name__})")
-    return SkinCalibration.from_dict(data, source=str(path))
+        raise ValueError(f"{path}: skin {design}: not a calibration file (top level is "
+                         f"{type(data).__name__}, expected an object)")
+    return SkinCalibration.from_dict(data, source=str(path), skin=design, require=require)
 
 
 def shipped_skins(directory: str | Path = SHIPPED_DIR) -> list[str]:

@@ -30,12 +30,14 @@ linear law) and needs the ``discrete`` integrator (light bodies, stiff springs).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import SkinLaw
+from softhand.validate import check_mapping, check_number, check_numbers, join
 
 __all__ = ["PadParams", "add_pad", "evaluate_pieces", "spline_pieces"]
 
@@ -140,10 +142,31 @@ class PadParams:
                 "n_knots": self.n_knots}
 
     @classmethod
-    def from_dict(cls, d: dict, law: SkinLaw) -> PadParams:
-        return cls(law, d["reference_mm"], d["contact_stiffness_N_per_m"],
-                   d["max_compression_mm"], tuple(d["damping_scale"]), d["pad_mass_kg"],
-                   d.get("n_knots", 6))
+    def from_dict(cls, d: Any, law: SkinLaw, *, key: str = "params") -> PadParams:
+        """Parse :meth:`to_dict` output for ``law``, checking every value.
+
+        Allowed: ``reference_mm``, ``contact_stiffness_N_per_m``, ``max_compression_mm`` and
+        ``pad_mass_kg`` > 0; ``damping_scale`` one number > 0 per Prony term of ``law``;
+        ``n_knots`` (optional, default 6) an integer in [1, 50].
+
+        Raises:
+            ValueError: ``"{key}.damping_scale = [1.0]: expected a list of 2 numbers ..."``.
+        """
+        names = ("reference_mm", "contact_stiffness_N_per_m", "max_compression_mm",
+                 "damping_scale", "pad_mass_kg")
+        check_mapping(key, d, required=names, optional=("n_knots",))
+        ref, stiff, comp = (check_number(join(key, n), d[n], lo=0.0, lo_open=True)
+                            for n in names[:3])
+        n_terms = len(law.prony.g)
+        scale = check_numbers(join(key, "damping_scale"), d["damping_scale"], length=n_terms,
+                              lo=0.0, lo_open=True, why="(one per Prony term of the law)")
+        mass = check_number(join(key, "pad_mass_kg"), d["pad_mass_kg"], lo=0.0, lo_open=True)
+        knots = int(check_number(join(key, "n_knots"), d.get("n_knots", 6), lo=1, hi=50,
+                                 integer=True))
+        try:
+            return cls(law, ref, stiff, comp, scale, mass, knots)
+        except ValueError as exc:
+            raise ValueError(f"{key}: {exc}") from None
 
 
 def _spring(spec: mujoco.MjSpec, name: str, joint: str, other: str | None,

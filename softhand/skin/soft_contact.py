@@ -22,11 +22,13 @@ the fit takes mm and N like the FE curves.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from softhand.laws.fit import paired_arrays
+from softhand.validate import check_mapping, check_number, check_numbers, join
 
 __all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
 
@@ -105,9 +107,33 @@ class SoftContactParams:
                 "damping_Ns_per_m_per_invmass": self.damping, "solimp": list(self.solimp)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> SoftContactParams:
-        return cls(d["stiffness_N_per_m_per_invmass"], d["damping_Ns_per_m_per_invmass"],
-                   tuple(d["solimp"]))
+    def from_dict(cls, d: Any, *, key: str = "params") -> SoftContactParams:
+        """Parse :meth:`to_dict` output, checking every value.
+
+        Allowed: ``stiffness_N_per_m_per_invmass`` > 0, ``damping_Ns_per_m_per_invmass`` >= 0,
+        ``solimp`` 5 numbers: d0 and dw in [1e-4, 0.3] with d0 <= dw, width > 0 (m), midpoint in
+        (0, 1), power >= 1.
+
+        Raises:
+            ValueError: ``"{key}.solimp[0] = 'x': expected a finite number in [0.0001, 0.3]"``.
+        """
+        names = ("stiffness_N_per_m_per_invmass", "damping_Ns_per_m_per_invmass", "solimp")
+        check_mapping(key, d, required=names)
+        stiffness = check_number(join(key, names[0]), d[names[0]], lo=0.0, lo_open=True)
+        damping = check_number(join(key, names[1]), d[names[1]], lo=0.0)
+        si = join(key, "solimp")
+        if not isinstance(d["solimp"], (list, tuple)) or len(d["solimp"]) != 5:
+            check_numbers(si, d["solimp"], length=5)  # raises: not a list of 5
+        d0, dw, width, mid, power = d["solimp"]
+        solimp = (check_number(f"{si}[0]", d0, lo=D_MIN, hi=D_MAX, why="(d0)"),
+                  check_number(f"{si}[1]", dw, lo=D_MIN, hi=D_MAX, why="(dw)"),
+                  check_number(f"{si}[2]", width, lo=0.0, lo_open=True, why="(width, m)"),
+                  check_number(f"{si}[3]", mid, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+                               why="(midpoint)"),
+                  check_number(f"{si}[4]", power, lo=1.0, why="(power)"))
+        if solimp[0] > solimp[1]:
+            raise ValueError(f"{si}[0] = {solimp[0]!r}: expected d0 <= dw = {solimp[1]!r}")
+        return cls(stiffness, damping, solimp)
 
 
 def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
