@@ -570,7 +570,8 @@ _OPT_REPORTS = click.option("--out", "out_dir", default=str(REPORTS_DIR), show_d
 
 @bench.command("fe")
 @_OPT_REPORTS
-@click.option("--quick", is_flag=True, help="Skip the fine-mesh reference runs.")
+@click.option("--quick", is_flag=True,
+              help="Skip the 3D fine-mesh reference runs (~40 min); keep those of the last report.")
 def bench_fe(out_dir, quick) -> None:
     """Time one 3D design (idle and next to CPU load), the sweeps and 2D; errors vs fine mesh."""
     from softhand.fem.bench import run_fe_benchmark
