@@ -363,6 +363,19 @@ def _shipped_settings_differ(out: Path, settings) -> list[str]:
     return sorted(k for k in new if k != "threads" and k in old and old[k] != new[k])
 
 
+def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[str, str],
+                  interrupted: bool) -> None:
+    """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing."""
+    where = f"wrote {written} of {total} {what} to {out}"
+    if interrupted:
+        raise Stopped(f"interrupted (Ctrl-C): {where}; missing: {', '.join(missing)}",
+                      EXIT_INTERRUPTED)
+    if missing:
+        reasons = "; ".join(f"{n}: {why}" for n, why in missing.items())
+        raise Stopped(f"error: {len(missing)} {what} failed ({reasons}); {where}",
+                      EXIT_CONVERGENCE)
+
+
 @fe.command("sweep")
 @_options(FE_OPTIONS)
 @click.option("--out", "out_dir", default=str(FE_DIR), show_default=True,
@@ -392,14 +405,7 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
             summary = write_results(batch.results, out, missing=missing,
                                     plot=not batch.interrupted)  # stop fast: no plot
         click.echo(paper_error_table(summary))
-    where = f"{len(batch.results)} of {len(names)} designs to {out}"
-    if batch.interrupted:
-        raise Stopped(f"interrupted (Ctrl-C): wrote {where}; missing: "
-                      f"{', '.join(missing) or '-'}", EXIT_INTERRUPTED)
-    if batch.errors:
-        raise Stopped(f"error: {len(batch.errors)} design(s) did not converge "
-                      f"({'; '.join(f'{n}: {e}' for n, e in batch.errors.items())}); "
-                      f"wrote {where}", EXIT_CONVERGENCE)
+    _end_of_batch("designs", len(batch.results), len(names), out, missing, batch.interrupted)
     click.echo(f"wrote {len(batch.results)} curves, summary.json and curves.png to {out} "
                f"({summary['total_wall_s']:.0f} s of FE)")
 
@@ -449,7 +455,6 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
 def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) -> None:
     """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
-    from softhand.io import interrupts_deferred
     from softhand.skin.calibrate import fe_curves, skin_names
     from softhand.skin.rig import REPRESENTATIONS
     from softhand.skin.run import calibrate_many, summary_table
@@ -480,17 +485,8 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     run = calibrate_many(names, reps, out_dir=out, fe_dir=fe_dir, threads=threads,
                          show_progress=not as_json)
     if run.index is not None:
-        with interrupts_deferred():
-            text = json.dumps(run.index, indent=1) if as_json else summary_table(run.index)
-        click.echo(text)
-    where = f"wrote {len(run.written)} of {len(names)} skins to {out}"
-    if run.interrupted:
-        raise Stopped(f"interrupted (Ctrl-C): {where}; missing: "
-                      f"{', '.join(n for n in run.missing)}", EXIT_INTERRUPTED)
-    if run.missing:
-        raise Stopped(f"error: {len(run.missing)} skin(s) failed "
-                      f"({'; '.join(f'{n}: {e}' for n, e in run.missing.items())}); {where}",
-                      EXIT_CONVERGENCE)
+        click.echo(json.dumps(run.index, indent=1) if as_json else summary_table(run.index))
+    _end_of_batch("skins", len(run.written), len(names), out, run.missing, run.interrupted)
 
 
 def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:

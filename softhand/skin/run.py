@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from softhand import __version__
-from softhand.io import atomic_write_json
+from softhand.io import atomic_write_json, interrupts_deferred
 from softhand.parallel import run_tasks
 from softhand.skin.calibrate import SkinCalibration, calibrate_skin
 from softhand.skin.files import FE_DIR, SHIPPED_DIR, save_calibration
@@ -56,11 +56,14 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
                           threads=threads, on_done=done)
     finally:
         bar.close()
-    for cal in batch.results.values():
-        save_calibration(_merged(cal, out), out)
     missing = {n: "interrupted" for n in batch.missing}
     missing.update({n: str(e) for n, e in batch.errors.items()})
-    index = rebuild_index(out, representations, missing=missing) if batch.results else None
+    index = None
+    with interrupts_deferred():  # the files and their index are written together
+        for cal in batch.results.values():
+            save_calibration(_merged(cal, out), out)
+        if batch.results:
+            index = rebuild_index(out, representations, missing=missing)
     return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
 
 
