@@ -201,3 +201,14 @@ def test_fe_curve_with_a_word_for_a_number_names_the_file(tmp_path):
 def test_missing_fe_curve_names_the_folder(tmp_path):
     rejected(["calibrate", "solid-pu", "--fe-dir", str(tmp_path), "--out", str(tmp_path / "o")],
              "--fe-dir", "solid-pu.csv", "softhand fe sweep")
+
+
+def test_fe_curve_cut_at_a_row_boundary_is_caught_by_its_recorded_hash(tmp_path):
+    """A curve cut after a whole row still parses; the sweep's recorded sha256 catches it."""
+    fe = _fe_copy(tmp_path, "solid-pu")
+    shutil.copy(FE_DIR / "summary.json", fe / "summary.json")
+    lines = (fe / "solid-pu.csv").read_text().splitlines(keepends=True)
+    (fe / "solid-pu.csv").write_text("".join(lines[: len(lines) // 2]))
+    rejected(["calibrate", "solid-pu", "--fe-dir", str(fe), "--out", str(tmp_path / "out")],
+             "--fe-dir", "solid-pu.csv", "sha256", "changed or truncated")
+    assert not (tmp_path / "out").exists()

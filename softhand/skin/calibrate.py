@@ -51,17 +51,42 @@ PAD_CONTACT_FACTOR = 300.0  # pad contact stiffness / the skin's largest tangent
 
 
 def fe_curves(design: str, fe_dir: str | Path) -> tuple[list[Curve], list[Curve]]:
-    """FE curves to fit (0.5 mm/s, and 5 mm/s if present) and to validate on (2 mm/s)."""
+    """FE curves to fit (0.5 mm/s, and 5 mm/s if present) and to validate on (2 mm/s).
+
+    Each curve is checked against the sha256 that its folder's ``summary.json`` recorded when
+    ``softhand fe sweep`` wrote it (when the summary has one): a curve cut at a row boundary
+    parses as a shorter curve, but not with the recorded hash.
+
+    Raises:
+        FileNotFoundError: no 0.5 mm/s curve for ``design``.
+        ValueError: a malformed curve, or one whose hash differs from the recorded one.
+    """
     root = Path(fe_dir)
     main = root / f"{design}.csv"
     if not main.exists():
         raise FileNotFoundError(f"no FE curve for {design!r} at {main}: run `softhand fe sweep`")
-    fit = [load_curve(main, f"{design}@0.5mm/s")]
+    fit = [_recorded_curve(main, f"{design}@0.5mm/s")]
     fast = root / "speed-5" / f"{design}.csv"
     if fast.exists():
-        fit.append(load_curve(fast, f"{design}@5mm/s"))
+        fit.append(_recorded_curve(fast, f"{design}@5mm/s"))
     val = root / "speed-2" / f"{design}.csv"
-    return fit, [load_curve(val, f"{design}@2mm/s")] if val.exists() else []
+    return fit, [_recorded_curve(val, f"{design}@2mm/s")] if val.exists() else []
+
+
+def _recorded_curve(path: Path, label: str) -> Curve:
+    import json
+
+    curve = load_curve(path, label)
+    try:
+        summary = json.loads((path.parent / "summary.json").read_text(encoding="utf-8"))
+        recorded = summary["provenance"]["curve_sha256"][path.stem]
+    except (OSError, ValueError, KeyError, TypeError):
+        return curve  # no record to compare with
+    if recorded != curve.sha256:
+        raise ValueError(f"{path}: its sha256 {curve.sha256[:12]}... differs from the "
+                         f"{recorded[:12]}... that {path.parent / 'summary.json'} recorded: the "
+                         "file was changed or truncated after `softhand fe sweep` wrote it")
+    return curve
 
 
 @dataclass(frozen=True)
