@@ -11,23 +11,34 @@ name               folder                                      written by / read
 ``REPORTS_DIR``    ``reports``                                 ``bench *``
 =================  ==========================================  ============================
 
-The folders are those of the source tree that holds the package (the repository). Folders under
-``CALIBRATION_DIR`` hold shipped data: :func:`is_shipped` tells whether a path lies there, so that a
+The shipped data is the package ``softhand.calibration`` (``calibration/`` of the repository, read
+through importlib.resources), so a regular (non-editable) install finds it as a checkout does.
+Reports go to ``reports/`` of the checkout, or of the working directory for an installed wheel.
+Folders under ``CALIBRATION_DIR`` hold shipped data: :func:`is_shipped` tells whether a path lies there, so that a
 command can refuse to overwrite shipped data with an incomplete set unless told to (``--force``).
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
 
-__all__ = ["CALIBRATION_DIR", "FE_DIR", "REPORTS_DIR", "REPO_ROOT", "SKINS_DIR", "is_shipped"]
+__all__ = ["CALIBRATION_DIR", "FE_DIR", "IN_CHECKOUT", "REPORTS_DIR", "REPO_ROOT", "SKINS_DIR",
+           "is_shipped"]
+
+def _calibration_dir() -> Path:
+    """The folder of the package ``softhand.calibration`` (``calibration/`` of a checkout)."""
+    return Path(str(resources.files("softhand.calibration"))).resolve()
+
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-CALIBRATION_DIR = REPO_ROOT / "calibration"
+#: True when running from a source checkout (editable install or PYTHONPATH), not a wheel
+IN_CHECKOUT = (REPO_ROOT / "pyproject.toml").is_file()
+CALIBRATION_DIR = _calibration_dir()
 FE_DIR = CALIBRATION_DIR / "fe"
 SKINS_DIR = CALIBRATION_DIR / "skins"
-REPORTS_DIR = REPO_ROOT / "reports"
+REPORTS_DIR = REPO_ROOT / "reports" if IN_CHECKOUT else Path("reports")
 
 
 def is_shipped(path: str | os.PathLike) -> bool:
