@@ -550,7 +550,16 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
     click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "
                f"only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
-    click.echo(f"bone on bone (no skin between): peak {summary['rigid_contact_peak_N']:.1f} N")
+    acc = summary["force_accounting"]
+    share = {k: 100 * acc[f"{k}_Ns"] / acc["total_Ns"] if acc["total_Ns"] else 0.0
+             for k in ("skin_law", "tissue_law_only", "bone_on_bone", "no_law")}
+    click.echo(f"force between the hands {acc['total_Ns']:.1f} N s: through a calibrated skin law "
+               f"inside its range {acc['calibrated_share_pct']:.1f} %; skin law "
+               f"{share['skin_law']:.1f} %, tissue law only (bare shell) "
+               f"{share['tissue_law_only']:.1f} %, bone on bone {share['bone_on_bone']:.1f} % "
+               f"(peak {acc['bone_on_bone_peak_N']:.1f} N), no law {share['no_law']:.1f} %; "
+               f"contacts beyond their law's calibrated range {acc['out_of_range_time_pct']:.1f} % "
+               "of contact time")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
 

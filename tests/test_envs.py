@@ -178,3 +178,17 @@ def test_ellipsoid_mean_curvature_radius_at_its_flattest_pole():
         '<mujoco><worldbody><geom type="ellipsoid" size="0.02 0.01 0.005"/></worldbody></mujoco>')
     # principal radii at the 5 mm pole: 20^2/5 = 80 mm and 10^2/5 = 20 mm; harmonic mean 32 mm
     assert mean_curvature_radius(model, 0) == pytest.approx(0.032)
+
+
+def test_force_accounting_adds_up_and_follows_the_skins():
+    """Classes add up to the total; rigid regions carry no skin law; a skin run does."""
+    from softhand.envs.run import ACCOUNT_CLASSES
+
+    rigid = run_handshake(design="rigid", seed=0).force_accounting()
+    assert rigid["skin_law_Ns"] == 0.0 and rigid["calibrated_share_pct"] == 0.0
+    skin = run_handshake(seed=0).force_accounting()
+    parts = sum(skin[f"{k}_Ns"] for k in ACCOUNT_CLASSES)
+    assert parts == pytest.approx(skin["total_Ns"], rel=1e-12) and skin["total_Ns"] > 0
+    assert 0.0 < skin["calibrated_share_pct"] <= 100 * skin["skin_law_Ns"] / skin["total_Ns"]
+    assert 0.0 <= skin["out_of_range_time_pct"] <= 100.0
+    assert skin["bone_on_bone_peak_N"] >= 0.0 and skin["unsensed_skin_Ns"] == 0.0

@@ -158,6 +158,7 @@ class HandshakeEnv(gym.Env):
         self.frame_skip = int(frame_skip)
         self.randomize = bool(randomize)
         directory = calibration_dir or SHIPPED_DIR
+        self.calibration_dir = str(directory)  # where the skins' laws came from
         for skin in sorted({*self.skins.values(), "rigid"}):
             series_law(skin, str(directory))  # reads and checks the file (cached for apply_skins)
         spec = scene_spec(self.config)

@@ -11,11 +11,14 @@ import numpy as np
 
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
+from softhand.envs.skins import calibrated_max_force
 from softhand.paper import paper
 
-__all__ = ["ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
+__all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
 
 OVER_N = 2.0  # the paper's Fig. 4 threshold
+#: where the normal force between the two hands comes from (force accounting)
+ACCOUNT_CLASSES = ("skin_law", "tissue_law_only", "bone_on_bone", "no_law")
 
 
 @dataclass
@@ -36,6 +39,38 @@ class HandshakeRun:
     model: mujoco.MjModel = field(repr=False)
     region_area_mm2: np.ndarray | None = None
     rigid_force_N: np.ndarray | None = None
+    accounting: np.ndarray | None = None  # per frame: ContactAreas.accounting
+
+    def force_accounting(self) -> dict[str, float]:
+        """Where the normal force between the hands came from, over the recorded frames.
+
+        ``skin_law``: a skin x tissue pair law (calibrated skin); ``tissue_law_only``: the bare
+        prosthetic shell or a ``rigid`` region against tissue (only the tissue law);
+        ``bone_on_bone``: bones pressed through skin and tissue (no law); ``no_law``: any other
+        contact between the hands. ``calibrated_share_pct``: the skin-law force inside its
+        calibrated range (:func:`softhand.envs.skins.calibrated_max_force`), in % of all the force
+        between the hands (frames of 10 ms; contacts beyond the range count as uncalibrated).
+        ``out_of_range_time_pct``: law-carrying contact-frames above their law's range, in % of
+        all law-carrying contact-frames. No region has non-sensing skin yet, so
+        ``unsensed_skin_Ns`` is 0.
+        """
+        n = len(ACCOUNT_CLASSES)
+        acc = self.accounting if self.accounting is not None else np.zeros((1, n + 3))
+        dt = float(np.median(np.diff(self.time_s))) if len(self.time_s) > 1 else 0.0
+        integral = {k: float(acc[:, i].sum() * dt) for i, k in enumerate(ACCOUNT_CLASSES)}
+        total = sum(integral.values())
+        out = {f"{k}_Ns": v for k, v in integral.items()}
+        out_in_skin = float(acc[:, n + 2].sum() * dt)
+        out.update({
+            "total_Ns": total,
+            "calibrated_share_pct": 100.0 * (integral["skin_law"] - out_in_skin) / total
+            if total > 0 else 100.0,
+            "bone_on_bone_peak_N": float(acc[:, 2].max()),
+            "bone_on_bone_Ns": integral["bone_on_bone"],
+            "out_of_range_time_pct": 100.0 * float(acc[:, n + 1].sum()) / max(1.0, acc[:, n].sum()),
+            "unsensed_skin_Ns": 0.0,
+        })
+        return out
 
     def table(self) -> dict[str, dict[str, float]]:
         """Per region: peak and mean force (N) and contact area (mm^2) over the handshake."""
@@ -61,6 +96,7 @@ class HandshakeRun:
         return {"regions": self.table(), "over_2N": self.over_2n,
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
                 "rigid_contact_peak_N": float(rigid.max()),
+                "force_accounting": self.force_accounting(),
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
 
 
@@ -103,7 +139,16 @@ class ContactAreas:
     skins); the deformed patch of a real skin is larger still (an estimate, not an FE result).
     """
 
-    def __init__(self, model: mujoco.MjModel, region_geoms: list[int]) -> None:
+    def __init__(self, model: mujoco.MjModel, region_geoms: list[int],
+                 laws: Mapping[tuple[int, int], tuple[int, float]] | None = None) -> None:
+        self.laws = dict(laws or {})
+        names = [model.geom(g).name or "" for g in range(model.ngeom)]
+        self.hand = np.array([0 if n.startswith("pro_") else 1 if n.startswith("hum_") else -1
+                              for n in names])
+        #: after each call: normal force (N) between the hands per class of ACCOUNT_CLASSES,
+        #: the number of law-carrying contacts, of those beyond their calibrated range, and the
+        #: skin-law force (N) in contacts beyond it
+        self.accounting = np.zeros(len(ACCOUNT_CLASSES) + 3)
         self.region_of = -np.ones(model.ngeom, dtype=int)
         self.region_of[np.asarray(region_geoms)] = np.arange(len(region_geoms))
         self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
@@ -118,15 +163,29 @@ class ContactAreas:
         area = np.zeros(self.n_regions)
         rigid = 0.0
         rows = []
+        acc = self.accounting
+        acc[:] = 0.0
+        n = len(ACCOUNT_CLASSES)
         for i in range(data.ncon):
             c = data.contact[i]
             if c.efc_address < 0:
                 continue
             mujoco.mj_contactForce(self.model, data, i, self._force)
-            rows.append([*c.pos, *c.frame[:3], self._force[0]])
+            f = self._force[0]
+            rows.append([*c.pos, *c.frame[:3], f])
             g1, g2 = c.geom1, c.geom2
+            if self.hand[g1] >= 0 and self.hand[g2] >= 0 and self.hand[g1] != self.hand[g2]:
+                law = self.laws.get((min(g1, g2), max(g1, g2)))
+                if law is not None:
+                    acc[law[0]] += f
+                    acc[n] += 1
+                    if f > law[1]:
+                        acc[n + 1] += 1
+                        acc[n + 2] += f if law[0] == 0 else 0.0
+                else:
+                    acc[2 if self.bone[g1] and self.bone[g2] else 3] += f
             if self.bone[g1] and self.bone[g2]:
-                rigid += self._force[0]
+                rigid += f
                 continue
             depth = -c.dist
             for g in (g1, g2):
@@ -134,6 +193,24 @@ class ContactAreas:
                 if r >= 0 and depth > 0:
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
+
+
+def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float]]:
+    """(geom, geom) of every contact pair -> (class index in ACCOUNT_CLASSES, calibrated range N).
+
+    Pairs ``{Region}__{tissue}`` carry the region's skin in series with tissue (``skin_law``;
+    a ``rigid`` region: ``tissue_law_only``); ``shell_{bone}__{tissue}`` the tissue law alone.
+    """
+    m = env.model
+    out = {}
+    for pid in range(m.npair):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
+        region = name.partition("__")[0]
+        skin = env.skins.get(region, "rigid")
+        kind = 0 if region in env.skins and skin != "rigid" else 1
+        g1, g2 = int(m.pair_geom1[pid]), int(m.pair_geom2[pid])
+        out[(min(g1, g2), max(g1, g2))] = (kind, calibrated_max_force(skin, env.calibration_dir))
+    return out
 
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
@@ -151,8 +228,9 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     record_every = record_every or env.frame_skip
     obs, info = env.reset(seed=seed)
     m, d = env.model, env.data
-    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms])
-    frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r")}
+    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env))
+    frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
+                                                "acc")}
     steps, wall = 0, 0.0
     while True:
         t0 = time.perf_counter()
@@ -170,6 +248,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["c"].append(rows)
             frames["a"].append(area)
             frames["r"].append(rigid)
+            frames["acc"].append(areas.accounting.copy())
         if term or trunc:
             break
     if term:
@@ -177,4 +256,4 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]),
                         np.array(frames["q"]), np.array(frames["mp"]), np.array(frames["mq"]),
                         np.array(frames["f"]), frames["c"], frames["ph"], wall, steps, m,
-                        np.array(frames["a"]), np.array(frames["r"]))
+                        np.array(frames["a"]), np.array(frames["r"]), np.array(frames["acc"]))

@@ -23,14 +23,14 @@ import numpy as np
 
 from softhand.hands import partner_tissue_geoms, regions
 from softhand.hands.prosthetic import paper_regions
-from softhand.laws.references import HUMAN, PROSTHETIC
+from softhand.laws.references import DATA_MAX_N, HUMAN, PROSTHETIC
 from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS, skin_names
 from softhand.skin.files import SHIPPED_DIR, load_calibration
 from softhand.skin.rig import apply_pair_law
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
-__all__ = ["DEFAULT_DESIGN", "SHELL_BONES", "SKIN_CHOICES", "add_skin_pairs", "apply_skins", "parse_skins",
-           "series_law"]
+__all__ = ["DEFAULT_DESIGN", "SHELL_BONES", "SKIN_CHOICES", "add_skin_pairs", "apply_skins",
+           "calibrated_max_force", "parse_skins", "series_law"]
 
 #: Prosthetic bones without a skin region whose shell meets the partner's tissue in a handshake.
 SHELL_BONES = ("thumb_metacarpal", "index_metacarpal", "little_metacarpal")
@@ -98,6 +98,25 @@ def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParam
                               np.concatenate([[0.0], f]), initial=tissue if skin == PROSTHETIC
                               else own, reference_mass_kg=CALIBRATION_MASS_KG * MASS_FACTORS[0])
     return law
+
+
+@functools.lru_cache(maxsize=32)
+def calibrated_max_force(skin: str, directory: str = str(SHIPPED_DIR)) -> float:
+    """Largest normal force (N) of the data behind ``skin``'s pair law against human tissue.
+
+    The pair law is the skin in series with the tissue, so it is calibrated up to the smaller of
+    the two laws' data ranges: a design's fitted range (the end of its elastic law, where the FE
+    curves stop, about 2 N), a reference skin's measurements (:data:`DATA_MAX_N`: human tissue
+    2 N). ``rigid``: the tissue's range.
+    """
+    def top(name: str) -> float:
+        if name in DATA_MAX_N:  # reference skins: the paper's measurements
+            return DATA_MAX_N[name]
+        elastic = load_calibration(name, directory).law.elastic
+        return float(elastic.force(elastic.max_mm))
+
+    tissue = top(HUMAN)
+    return tissue if skin == "rigid" else min(tissue, top(skin))
 
 
 def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:

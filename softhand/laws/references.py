@@ -22,11 +22,15 @@ from softhand.laws.fit import SkinLaw
 from softhand.laws.qlv import Prony
 from softhand.paper import paper
 
-__all__ = ["HUMAN", "PROSTHETIC", "human_law", "prosthetic_law", "reference_law"]
+__all__ = ["DATA_MAX_N", "HUMAN", "PROSTHETIC", "human_law", "prosthetic_law", "reference_law"]
 
 HUMAN = "human-middle-phalanx"
 PROSTHETIC = "prosthetic-102l"
 HUMAN_AT_1N_MM = 2.5  # assumption: the paper says "more than 2 mm" at 1 N
+#: Largest force of the measurements behind each reference law (N): the human phalanges were
+#: indented to 2 N (Methods: indentation experiments), the 102L phalanx is quoted at 1 N (Fig. 8).
+#: Beyond these the laws are extrapolations, not calibration.
+DATA_MAX_N = {HUMAN: 2.0, PROSTHETIC: 1.0}
 
 
 def _human_at_2n_mm() -> float:
