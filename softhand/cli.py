@@ -5,6 +5,7 @@
 ``softhand fe export DESIGN``   an Abaqus or CalculiX input deck of the same model
 ``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
 ``softhand handshake``          one handshake with shipped calibration: region forces, rerun recording
+``softhand render OUT.png``     a picture of the handshake (offscreen mujoco.Renderer)
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 ``softhand bench handshake``    handshake speed and the skins side by side
@@ -36,6 +37,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import click
+import numpy as np
 
 from softhand import __version__
 from softhand.paths import FE_DIR, REPORTS_DIR, SKINS_DIR, is_shipped
@@ -562,6 +564,49 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
                "of contact time")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
+
+
+@main.command("render")
+@click.argument("out")
+@click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
+@click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
+              default="neutral", show_default=True, help="Controller of the prosthetic hand.")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
+              help="Seed of the partner, 0 <= seed < 2^32.")
+@click.option("--at", "at_s", type=Number(0, 10, unit="s"), default=None,
+              help="Time of the picture, 0-10 s [default: the middle of the shake].")
+@click.option("--azimuth", type=Number(-360, 360, unit="deg"), default=150.0, show_default=True)
+@click.option("--elevation", type=Number(-90, 90, unit="deg"), default=-30.0, show_default=True)
+@click.option("--distance", type=Number(0.05, 5, unit="m"), default=0.3, show_default=True)
+@click.option("--size", nargs=2, type=click.IntRange(64, 4096), default=(960, 720),
+              show_default=True, help="Width and height in pixels, 64-4096.")
+def render(out, design, controller, seed, at_s, azimuth, elevation, distance, size) -> None:
+    """Run one handshake and render the scene at one moment to OUT (.png), offscreen.
+
+    Needs an OpenGL context: MUJOCO_GL=egl (set here when unset) or osmesa.
+    """
+    os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
+    from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.run import run_handshake
+    from softhand.viz.render import CameraView, render_state
+
+    if design is not None and not design.strip():
+        _bad("--design '': expected a skin name, e.g. pocket2-sil")
+    path = _checked_file(out, "OUT", ".png")
+    try:
+        env = HandshakeEnv(design=design)
+    except ValueError as exc:
+        _bad(str(exc))
+    run = run_handshake(controller=controller, seed=seed, env=env)
+    if at_s is None:
+        shake = [i for i, p in enumerate(run.phase) if p == "shake"]
+        k = shake[len(shake) // 2]
+    else:
+        k = int(np.argmin(np.abs(run.time_s - at_s)))
+    view = CameraView(distance_m=distance, azimuth_deg=azimuth, elevation_deg=elevation)
+    render_state(run.model, run.qpos[k], run.mocap_pos[k], run.mocap_quat[k], path,
+                 width=size[0], height=size[1], view=view)
+    click.echo(f"wrote {path} (t = {run.time_s[k]:.2f} s, {run.phase[k]})")
 
 
 @main.group()

@@ -94,6 +94,7 @@ def test_paths_that_cannot_be_written(tmp_path):
     rejected(["bench", "fe", "--out", str(plain)], "--out", "not a folder")
     rejected(["fe", "export", "solid-pu", str(tmp_path / "deck.txt")], "OUT", ".inp")
     rejected(["fe", "export", "solid-pu", str(plain / "deck.inp")], "OUT", "is a file")
+    rejected(["render", str(tmp_path / "hs.jpg")], "OUT", ".png")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
 
 
