@@ -192,3 +192,36 @@ def test_force_accounting_adds_up_and_follows_the_skins():
     assert 0.0 < skin["calibrated_share_pct"] <= 100 * skin["skin_law_Ns"] / skin["total_Ns"]
     assert 0.0 <= skin["out_of_range_time_pct"] <= 100.0
     assert skin["bone_on_bone_peak_N"] >= 0.0 and skin["unsensed_skin_Ns"] == 0.0
+
+
+def test_shipped_mjcf_is_the_simulated_model():
+    """models/mjcf/handshake_scene.xml, loaded by plain MuJoCo and fed the env's inputs, gives the
+    env's region forces at every step (to 1e-9 N): the skin laws are in the MJCF."""
+    from pathlib import Path
+
+    xml = Path(__file__).resolve().parents[1] / "models" / "mjcf" / "handshake_scene.xml"
+    model = mujoco.MjModel.from_xml_path(str(xml))  # no softhand code from here on
+    data = mujoco.MjData(model)
+    env = HandshakeEnv(frame_skip=1)  # one physics step per action: the inputs of every step
+    ctrl = make_controller("neutral")
+    obs, info = env.reset(seed=0)
+    state = mujoco.mjtState.mjSTATE_INTEGRATION
+    buf = np.empty(mujoco.mj_stateSize(env.model, state))
+    mujoco.mj_getState(env.model, env.data, buf, state)
+    mujoco.mj_setState(model, data, buf, state)
+    touch = [model.sensor_adr[model.sensor(f"pro_touch_{r}").id] for r in env.region_names]
+    worst, steps, total = 0.0, 0, 0.0
+    while True:
+        obs, _, term, trunc, info = env.step(ctrl(obs, info))
+        data.ctrl[:] = env.data.ctrl
+        data.mocap_pos[:] = env.data.mocap_pos
+        data.mocap_quat[:] = env.data.mocap_quat
+        mujoco.mj_step(model, data)
+        forces = np.array([info["region_forces_N"][r] for r in env.region_names])
+        worst = max(worst, float(np.abs(data.sensordata[touch] - forces).max()))
+        total += forces.sum()
+        steps += 1
+        if term or trunc:
+            break
+    assert steps > 1000 and total > 100.0  # a whole handshake, with contact
+    assert worst <= 1e-9

@@ -316,12 +316,16 @@ def test_touch_sensors_read_skin_pair_contacts():
 
 
 def test_mjcf_files_are_up_to_date(tmp_path):
-    written = write_mjcf(tmp_path)
-    assert sorted(p.name for p in written) == sorted(MJCF_FILES)
+    """The hands' files and the skinned scene (softhand.envs.models) equal a fresh build."""
+    from softhand.envs.models import SCENE_FILE, write_models
+
+    assert sorted(p.name for p in write_mjcf(tmp_path / "hands")) == sorted(MJCF_FILES)
+    written = write_models(tmp_path / "all")
+    assert sorted(p.name for p in written) == sorted([*MJCF_FILES, SCENE_FILE])
     for path in written:
         shipped = MJCF_DIR / path.name
-        assert shipped.exists(), f"{shipped} missing: run write_mjcf('models/mjcf')"
-        assert path.read_text() == shipped.read_text(), f"{shipped} is stale: run write_mjcf"
+        assert shipped.exists(), f"{shipped} missing: run write_models('models/mjcf')"
+        assert path.read_text() == shipped.read_text(), f"{shipped} is stale: run write_models"
         assert mujoco.MjModel.from_xml_path(str(shipped)).nbody > 1
 
 

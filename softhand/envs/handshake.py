@@ -14,8 +14,9 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
-from softhand.envs.skins import add_skin_pairs, apply_skins, parse_skins, series_law
+from softhand.envs.skins import parse_skins, series_law
 from softhand.hands import (
     SceneConfig,
     partner_actuators,
@@ -23,7 +24,6 @@ from softhand.hands import (
     partner_start_pose,
     prosthetic_actuators,
     regions,
-    scene_spec,
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
 from softhand.skin.files import SHIPPED_DIR
@@ -160,11 +160,13 @@ class HandshakeEnv(gym.Env):
         directory = calibration_dir or SHIPPED_DIR
         self.calibration_dir = str(directory)  # where the skins' laws came from
         for skin in sorted({*self.skins.values(), "rigid"}):
-            series_law(skin, str(directory))  # reads and checks the file (cached for apply_skins)
-        spec = scene_spec(self.config)
-        add_skin_pairs(spec)
-        self.model = spec.compile()
-        apply_skins(self.model, self.skins, directory=directory)
+            series_law(skin, str(directory))  # reads and checks the file (cached)
+        # the laws are written into the spec, and the model is compiled from the spec's MJCF text,
+        # so that models/mjcf/handshake_scene.xml is exactly the simulated model (the XML writer
+        # rounds numbers: a model compiled from the spec itself differs in the last digits)
+        spec = skinned_scene_spec(self.skins, self.config, directory=directory)
+        spec.compile()
+        self.model = mujoco.MjModel.from_xml_string(spec.to_xml())
         self.data = mujoco.MjData(self.model)
         m = self.model
         self.region_names = tuple(self.skins)

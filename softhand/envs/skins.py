@@ -26,11 +26,12 @@ from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN, PROSTHETIC
 from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS, skin_names
 from softhand.skin.files import SHIPPED_DIR, load_calibration
-from softhand.skin.rig import apply_pair_law
+from softhand.skin.rig import pair_law_values
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
-__all__ = ["DEFAULT_DESIGN", "SHELL_BONES", "SKIN_CHOICES", "add_skin_pairs", "apply_skins",
-           "calibrated_max_force", "parse_skins", "series_law"]
+__all__ = ["DEFAULT_DESIGN", "SHELL_BONES", "SKIN_CHOICES", "add_skin_pairs",
+           "calibrated_max_force", "parse_skins", "series_law",
+           "write_skin_laws"]
 
 #: Prosthetic bones without a skin region whose shell meets the partner's tissue in a handshake.
 SHELL_BONES = ("thumb_metacarpal", "index_metacarpal", "little_metacarpal")
@@ -126,14 +127,23 @@ def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:
     return np.interp(force_N, f, d)
 
 
-def apply_skins(model: mujoco.MjModel, skins: Mapping[str, str], *,
-                directory: str | Path = SHIPPED_DIR, pro: str = "pro_") -> None:
-    """Write each region's pair law into the compiled model (pairs from :func:`add_skin_pairs`);
-    shell pairs get the ``rigid`` law."""
-    for pid in range(model.npair):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
-        region, _, _ = name.partition("__")
-        if region in skins:
-            apply_pair_law(model, pid, series_law(skins[region], str(directory)))
-        elif region.startswith("shell_"):
-            apply_pair_law(model, pid, series_law("rigid", str(directory)))
+def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str], *,
+                    directory: str | Path = SHIPPED_DIR, pro: str = "pro_") -> list[str]:
+    """Add the skin pairs (:func:`add_skin_pairs`) to ``spec`` with each region's pair law in
+    their ``solref``/``solimp``; shell pairs get the ``rigid`` law (the tissue alone).
+
+    The laws are written into the spec before the caller compiles it, so the MJCF of the spec
+    (``spec.to_xml()``, ``models/mjcf/handshake_scene.xml``) is the simulated model. The pair's
+    inverse inertia that scales each law is read from one compile of the spec with the pairs.
+
+    Returns:
+        The pair names.
+    """
+    names = add_skin_pairs(spec, pro=pro)
+    model = spec.compile()
+    for name in names:
+        region = name.partition("__")[0]
+        skin = skins.get(region, "rigid")
+        pair = spec.pair(name)
+        pair.solref, pair.solimp = pair_law_values(model, name, series_law(skin, str(directory)))
+    return names

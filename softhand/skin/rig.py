@@ -168,6 +168,19 @@ CHECKED_TIMESTEPS_S = (0.5e-3, 2e-3)  # the calibration is tested at 0.5, 1 and 
 def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactParams) -> None:
     """Write ``params`` into a compiled pair, scaled by the pair's inverse inertia.
 
+    Warns as :func:`pair_law_values`.
+    """
+    pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
+    model.pair_solref[pid], model.pair_solimp[pid] = pair_law_values(model, pid, params)
+
+
+def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactParams
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The pair's ``solref`` and ``solimp`` for ``params``, scaled by its inverse inertia.
+
+    ``model`` is the compiled model (its ``body_invweight0``); the values may go into that model
+    or into the spec it was compiled from (the inverse inertia does not depend on them).
+
     Warns (:class:`SkinRangeWarning`) when the timestep is outside the checked range, or when the
     skin's stiffest point on the pair's effective mass oscillates faster than an explicit
     constraint update can follow (omega * timestep > 1; ``discrete`` integrates it implicitly).
@@ -178,8 +191,7 @@ def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactPa
     if pid < 0:
         raise ValueError(f"pair {pair!r} is not in the model")
     inv = pair_inverse_inertia(model, pid)
-    model.pair_solref[pid] = params.solref(inv)
-    model.pair_solimp[pid] = params.solimp
+    values = (np.asarray(params.solref(inv), dtype=float), np.asarray(params.solimp, dtype=float))
     h = float(model.opt.timestep)
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
     if not CHECKED_TIMESTEPS_S[0] <= h <= CHECKED_TIMESTEPS_S[1]:
@@ -194,6 +206,7 @@ def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactPa
                       f"{omega * h:.2f} > 1 is outside the calibrated range (unstable): use a "
                       f"timestep below {1e3 / omega:.3g} ms or a heavier body",
                       SkinRangeWarning, stacklevel=2)
+    return values
 
 
 def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> float:
