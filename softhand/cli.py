@@ -534,8 +534,8 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
         _bad(str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)
     if record is not None:
+        from softhand.bench.handshake import frames_of
         from softhand.viz import record_handshake
-        from softhand.viz.bench import frames_of
 
         record_handshake(record, run.model, frames_of(run))
     summary = run.summary()
@@ -624,7 +624,7 @@ _OPT_REPORTS = click.option("--out", "out_dir", default=str(REPORTS_DIR), show_d
               help="Skip the 3D fine-mesh reference runs (~40 min); keep those of the last report.")
 def bench_fe(out_dir, quick) -> None:
     """Time one 3D design (idle and next to CPU load), the sweeps and 2D; errors vs fine mesh."""
-    from softhand.fem.bench import run_fe_benchmark
+    from softhand.bench.fe import run_fe_benchmark
 
     click.echo(run_fe_benchmark(_checked_dir(out_dir, "--out"), quick=quick))
 
@@ -633,7 +633,7 @@ def bench_fe(out_dir, quick) -> None:
 @_OPT_REPORTS
 def bench_handshake(out_dir) -> None:
     """Handshake speed (recording off/on, 0.5-2 ms) and the skins side by side."""
-    from softhand.viz.bench import run_handshake_benchmark
+    from softhand.bench.handshake import run_handshake_benchmark
 
     click.echo(run_handshake_benchmark(_checked_dir(out_dir, "--out")))
 
@@ -644,7 +644,7 @@ def bench_handshake(out_dir) -> None:
               "[default: every shipped skin].")
 def bench_calibration(out_dir, skins) -> None:
     """Each representation's error against FE and cost per step relative to rigid, one run."""
-    from softhand.skin.bench import run_calibration_benchmark
+    from softhand.bench.calibration import run_calibration_benchmark
     from softhand.skin.files import shipped_skins
 
     out = _checked_dir(out_dir, "--out")

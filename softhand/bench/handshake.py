@@ -20,20 +20,17 @@ Lives in the last stage because it times the recording too.
 
 from __future__ import annotations
 
-import os
-import platform
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-import mujoco
-
+from softhand.bench.common import machine_info, machine_line
 from softhand.envs.controllers import CONTROLLERS
 from softhand.envs.run import OVER_N, HandshakeRun, run_handshake
-from softhand.fem.sweep import git_revision
 from softhand.io import atomic_write_json, atomic_write_text
 from softhand.paper import paper
+from softhand.paths import REPORTS_DIR
 from softhand.viz.recording import HandshakeFrames, record_handshake
 
 __all__ = ["SENSITIVITY_SKINS", "frames_of", "run_handshake_benchmark"]
@@ -117,15 +114,13 @@ def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
     return out
 
 
-def run_handshake_benchmark(out_dir: str | Path = "reports", *,
+def run_handshake_benchmark(out_dir: str | Path = REPORTS_DIR, *,
                             skins: tuple[str, ...] = SENSITIVITY_SKINS) -> str:
     """Run the benchmark, write ``bench-handshake.json`` and ``bench-handshake.md``, return the
     Markdown."""
     out = Path(out_dir)
-    data: dict[str, Any] = {"machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
-                                        "python": platform.python_version(),
-                                        "mujoco": mujoco.__version__},
-                            "git_revision": git_revision()}
+    machine = machine_info()
+    data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
     data["speed"] = {f"{ts * 1000:g} ms": {"recording_off": _speed(ts, record=False),
                                           "recording_on": _speed(ts, record=True)}
                      for ts in TIMESTEPS_S}
@@ -141,8 +136,7 @@ def _markdown(d: dict[str, Any]) -> str:
     m = d["machine"]
     lines = [
         "# Handshake benchmark (`softhand bench handshake`)", "",
-        f"Machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}, MuJoCo {m['mujoco']}; "
-        f"git {d['git_revision']}. One process, one core for the simulation.", "",
+        f"{machine_line(m)} One process, one core for the simulation.", "",
         f"Speed of one {next(iter(d['speed'].values()))['recording_off']['sim_s']:.2f} s handshake "
         "(seed 0, pocket2-sil, neutral controller, 37 touch sensors, actions at 100 Hz), best of "
         f"{REPEATS}; recording on adds the time to write the rerun file:", "",

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
-import platform
 import subprocess
 import sys
 import time
@@ -28,9 +26,10 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from softhand.bench.common import machine_info, machine_line
 from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import IndentationSettings, indent
-from softhand.fem.sweep import compare_with_paper, git_revision, run_sweep
+from softhand.fem.sweep import compare_with_paper, run_sweep
 from softhand.io import atomic_write_json, atomic_write_text
 from softhand.parallel import available_cpus, default_threads
 from softhand.paths import REPORTS_DIR
@@ -77,12 +76,8 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
     """
     out = Path(out_dir)
     ramp = IndentationSettings(hold_s=0.0)
-    data: dict[str, Any] = {"machine": {"platform": platform.platform(),
-                                        "cpus": os.cpu_count(),
-                                        "available_cpus": available_cpus(),
-                                        "default_threads": default_threads(),
-                                        "python": platform.python_version()},
-                            "git_revision": git_revision()}
+    machine = machine_info()
+    data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
     one = indent("pocket2-sil", ramp)
     one_hold = indent("pocket2-sil", IndentationSettings())
     data["one_design"] = {"design": "pocket2-sil", "ramp_wall_s": one.wall_s,
@@ -154,8 +149,7 @@ def _markdown(d: dict[str, Any]) -> str:
 
     lines = [
         "# FE benchmark (`softhand bench fe`)", "",
-        f"Machine: {d['machine']['platform']}, {d['machine']['cpus']} CPUs, Python "
-        f"{d['machine']['python']}; git {d['git_revision']}.", "",
+        machine_line({"git_revision": d["git_revision"], **d["machine"]}), "",
         "| what | wall (s) |", "|---|---|",
         f"| one 3D design (pocket2-sil) to 2 N, default mesh | {d['one_design']['ramp_wall_s']:.1f} |",
         f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",

@@ -8,15 +8,14 @@ in the same run. Writes ``bench-calibration.{md,json,png}``; timings are reporte
 
 from __future__ import annotations
 
-import os
-import platform
 from pathlib import Path
 from typing import Any
 
-import mujoco
 import numpy as np
 
+from softhand.bench.common import machine_info, machine_line
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
+from softhand.paths import REPORTS_DIR
 from softhand.skin.calibrate import (
     CALIBRATION_MASS_KG,
     fe_curves,
@@ -39,7 +38,7 @@ def _record(name: str, cal):
         return law_curve(cal.law)
 
 
-def run_calibration_benchmark(out_dir: str | Path = "reports", *, skins: list[str] | None = None,
+def run_calibration_benchmark(out_dir: str | Path = REPORTS_DIR, *, skins: list[str] | None = None,
                               skin_dir: str | Path = SHIPPED_DIR) -> str:
     """Run the benchmark, write the report files, return the Markdown."""
     names = skins or shipped_skins(skin_dir)
@@ -68,8 +67,7 @@ def run_calibration_benchmark(out_dir: str | Path = "reports", *, skins: list[st
         for r in row.values():
             r["cost_vs_rigid"] = None if not base else r["step_us"] / base
         rows[name] = row
-    data = {"machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
-                        "python": platform.python_version(), "mujoco": mujoco.__version__},
+    data = {"machine": machine_info(),
             "rig": {"timestep_s": settings.timestep, "mass_kg": settings.mass_kg},
             "skins": rows, "by_representation": _aggregate(rows)}
     out = Path(out_dir)
@@ -118,8 +116,7 @@ def _fmt(v, spec=".2f") -> str:
 def _markdown(d: dict[str, Any]) -> str:
     m = d["machine"]
     lines = ["# MuJoCo skin representations (`softhand bench calibration`)", "",
-             f"Machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}, MuJoCo "
-             f"{m['mujoco']}. Rig: timestep {d['rig']['timestep_s'] * 1e3:g} ms, mass "
+             f"{machine_line(m)} Rig: timestep {d['rig']['timestep_s'] * 1e3:g} ms, mass "
              f"{d['rig']['mass_kg']} kg; errors against the 0.5 mm/s FE ramp-and-hold.", "",
              "| representation | worst RMS % of 2 N | median RMS % | worst hold error % | "
              "cost / rigid (median) | us per step |", "|---|---|---|---|---|---|"]
