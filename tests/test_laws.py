@@ -130,3 +130,20 @@ def test_basis_matrix_columns_are_the_law_of_unit_coefficients():
     B = basis_matrix(knots, d)
     c = np.array([0.1, 0.2, 0.3, 0.4, 0.5])
     np.testing.assert_allclose(B @ c, ElasticLaw(knots, c).force(d), rtol=1e-12)
+
+
+def test_fit_status_names_a_fit_that_stopped_at_its_budget():
+    """A fit that meets its tolerances is CONVERGED; one cut by max_nfev warns and says so."""
+    import numpy as np
+    from scipy.optimize import least_squares
+
+    from softhand.laws.fit import FitStatus, FitWarning, fit_status
+
+    def residual(x):
+        return np.array([10 * (x[1] - x[0] ** 2), 1 - x[0]])  # Rosenbrock
+
+    done = least_squares(residual, [-1.2, 1.0], xtol=1e-12)
+    assert fit_status(done, "rosenbrock") is FitStatus.CONVERGED
+    cut = least_squares(residual, [-1.2, 1.0], max_nfev=2)
+    with pytest.warns(FitWarning, match="rosenbrock: the fit stopped after"):
+        assert fit_status(cut, "rosenbrock") is FitStatus.BUDGET

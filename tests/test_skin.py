@@ -13,6 +13,7 @@ import pytest
 
 from softhand.laws import Curve, ElasticLaw, Prony, SkinLaw, fit_skin_law, load_curve, qlv_force
 from softhand.laws.elastic import knot_vector
+from softhand.laws.fit import FitStatus
 from softhand.skin.calibrate import CALIBRATION_MASS_KG, SkinCalibration, _ramp, calibrate_design
 from softhand.skin.files import load_calibration, save_calibration
 from softhand.skin.finger import POSTURES_DEG, press_finger
@@ -57,7 +58,8 @@ def test_closed_form_contact_law_is_what_mujoco_computes_at_rest(mass):
 
 def test_soft_contact_fit_recovers_known_parameters():
     d = np.linspace(0.0, 3.5, 120)
-    fit, rms = fit_soft_contact(d, KNOWN.force(d))
+    fit, rms, status = fit_soft_contact(d, KNOWN.force(d))
+    assert status is FitStatus.CONVERGED
     assert rms < 1e-4
     assert fit.stiffness == pytest.approx(KNOWN.stiffness, rel=0.02)
     np.testing.assert_allclose(fit.solimp, KNOWN.solimp, rtol=0.02)

@@ -95,7 +95,7 @@ def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParam
     f = np.linspace(0.0, 2.5, 120)[1:]
     d_skin = _invert(own, f)
     d_tissue = _invert(tissue, f)
-    law, _ = fit_soft_contact(np.concatenate([[0.0], d_skin + d_tissue]),
+    law, _, _ = fit_soft_contact(np.concatenate([[0.0], d_skin + d_tissue]),
                               np.concatenate([[0.0], f]), initial=tissue if skin == PROSTHETIC
                               else own, reference_mass_kg=CALIBRATION_MASS_KG * MASS_FACTORS[0])
     return law

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import warnings
 from dataclasses import dataclass, field
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -21,8 +23,42 @@ from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector
 from softhand.laws.qlv import Prony, qlv_force, qlv_response_matrix
 from softhand.validate import check_mapping, check_number, join, show
 
-__all__ = ["CURVE_COLUMNS", "Curve", "CurveError", "SkinLaw", "curve_errors", "fit_skin_law", "load_curve",
-           "paired_arrays"]
+__all__ = [
+    "CURVE_COLUMNS",
+    "Curve",
+    "CurveError",
+    "FitStatus",
+    "FitWarning",
+    "SkinLaw",
+    "curve_errors",
+    "fit_skin_law",
+    "fit_status",
+    "load_curve",
+    "paired_arrays",
+]
+
+
+class FitStatus(str, Enum):
+    """How a least-squares fit ended."""
+
+    CONVERGED = "converged"  # a tolerance (xtol, ftol or gtol) was met
+    BUDGET = "evaluation budget"  # stopped at max_nfev: the result is the best found, not a minimum
+
+
+class FitWarning(UserWarning):
+    """A fit stopped at its evaluation budget instead of converging."""
+
+
+def fit_status(result, what: str) -> FitStatus:
+    """The :class:`FitStatus` of a ``scipy.optimize.least_squares`` result; warns
+    (:class:`FitWarning`, naming ``what``) when it stopped at its evaluation budget."""
+    if result.status > 0:
+        return FitStatus.CONVERGED
+    warnings.warn(f"{what}: the fit stopped after {result.nfev} evaluations without meeting its "
+                  f"tolerances (cost {result.cost:.3g}); the result is the best found",
+                  FitWarning, stacklevel=3)
+    return FitStatus.BUDGET
+
 
 REFERENCE_FORCE_N = 2.0
 
@@ -352,15 +388,18 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
         res = least_squares(lambda th: solve(th)[1], theta0, bounds=bounds, x_scale=1.0,
                             diff_step=1e-4, xtol=1e-10, ftol=1e-12, max_nfev=300)
         theta = res.x
+        status = fit_status(res, f"{name}: Prony terms")
     else:
         theta = np.zeros(0)
+        status = FitStatus.CONVERGED  # the elastic part is a linear (NNLS) solve
     coef, _ = solve(theta)
     prony = unpack(theta)
     order = np.argsort(prony.tau_s)
     prony = Prony(tuple(np.asarray(prony.g)[order]), tuple(np.asarray(prony.tau_s)[order]))
     law = SkinLaw(name, ElasticLaw(knots, coef), prony,
                   source={"curves": {c.label: c.sha256 for c in curves},
-                          "validation": {c.label: c.sha256 for c in validation}})
+                          "validation": {c.label: c.sha256 for c in validation},
+                          "fit_status": status.value})
     return SkinLaw(law.name, law.elastic, law.prony,
                    tuple(curve_errors(law, c) for c in curves),
                    tuple(curve_errors(law, c) for c in validation), law.source)

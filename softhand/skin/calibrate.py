@@ -34,7 +34,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from softhand import __version__
-from softhand.laws.fit import Curve, SkinLaw, fit_skin_law, load_curve
+from softhand.laws.fit import Curve, FitStatus, SkinLaw, fit_skin_law, fit_status, load_curve
 from softhand.skin.pad import PadParams
 from softhand.skin.rig import RigSettings, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -311,7 +311,7 @@ def _fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings) -> tuple[PadPara
     """Branch damping multipliers by least squares against simulated indentations."""
     n = len(law.prony.g)
     if n == 0:
-        return _pad_params(law), 0
+        return _pad_params(law), 0, FitStatus.CONVERGED
     grid = np.linspace(curve.time_s[0], curve.time_s[-1], 400)
     target = np.interp(grid, curve.time_s, curve.force_N)
     evals = 0
@@ -326,7 +326,8 @@ def _fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings) -> tuple[PadPara
 
     res = least_squares(residual, np.zeros(n), bounds=(np.full(n, -3.0), np.full(n, 3.0)),
                         diff_step=0.05, xtol=1e-3, ftol=1e-4, max_nfev=8)
-    return _pad_params(law, tuple(np.exp(res.x))), evals
+    status = fit_status(res, f"{law.name}: relaxation pad branch damping")
+    return _pad_params(law, tuple(np.exp(res.x))), evals, status
 
 
 def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
@@ -359,12 +360,15 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
             kw: dict[str, Any] = {}
         elif rep == "soft-contact":
             _, d, f = _ramp(main)
-            soft, rms_n = fit_soft_contact(d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
+            soft, rms_n, status = fit_soft_contact(
+                d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
+            extra["fit_status"] = status.value
             params, kw = soft.to_dict(), {"soft": soft}
             extra["closed_form_rms_pct_of_2N"] = 100 * rms_n / 2.0
             extra["posture_sensitivity_pct"] = _posture_sensitivity(soft, float(d[-1]))
         elif rep == "soft-contact+relaxation":
-            pad, evals = _fit_pad(law, main, settings)
+            pad, evals, status = _fit_pad(law, main, settings)
+            extra["fit_status"] = status.value
             params, kw = pad.to_dict(), {"pad": pad}
             extra["rig_simulations"] = evals
         elif rep == "flex":

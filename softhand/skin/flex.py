@@ -49,6 +49,8 @@ import mujoco
 import numpy as np
 from scipy.optimize import least_squares
 
+from softhand.laws.fit import FitStatus, fit_status
+
 __all__ = ["FlexCurve", "FlexFit", "FlexPadParams", "build_flex_rig", "fit_flex", "flex_cost_ratio",
            "plate_force", "simulate_flex_indentation"]
 
@@ -408,7 +410,8 @@ def fit_flex(delta_mm, force_N, *, speed_mm_s: float = 0.5, seed: int = 0,
     return FlexFit(params=params_of(sol.x), rms_error_pct_of_2N=float(np.sqrt(np.mean(err**2))),
                    max_error_pct_of_2N=float(np.abs(err).max()), n_simulations=len(cache),
                    wall_s=time.perf_counter() - t0, force_sim_N=res * 2.0 + f_t,
-                   success=bool(sol.success), step_us=1e6 * float(np.mean(step_s)))
+                   success=fit_status(sol, "flex Young's modulus") is FitStatus.CONVERGED,
+                   step_us=1e6 * float(np.mean(step_s)))
 
 
 def flex_cost_ratio(params: FlexPadParams | None = None, *, timestep: float = 1e-3,

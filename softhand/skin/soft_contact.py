@@ -22,12 +22,12 @@ the fit takes mm and N like the FE curves.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from softhand.laws.fit import paired_arrays
+from softhand.laws.fit import FitStatus, fit_status, paired_arrays
 from softhand.validate import check_mapping, check_number, check_numbers, join
 
 __all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
@@ -136,6 +136,15 @@ class SoftContactParams:
         return cls(stiffness, damping, solimp)
 
 
+class SoftContactFit(NamedTuple):
+    """What :func:`fit_soft_contact` found: the parameters, their RMS error (N) on the given
+    curve and how the best start's least-squares fit ended."""
+
+    params: SoftContactParams
+    rms_N: float
+    status: FitStatus
+
+
 def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
                      reference_mass_kg: float = 0.02,
                      initial: SoftContactParams | None = None) -> tuple[SoftContactParams, float]:
@@ -181,9 +190,10 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
                             method="trf", max_nfev=2000, xtol=1e-12, ftol=1e-12)
         if best is None or res.cost < best.cost:
             best = res
+    status = fit_status(best, "soft contact (solref/solimp)")
     stiffness, solimp = unpack(best.x)
     k_end = float(np.gradient(model(best.x, r), r)[-1])
     damping = 2 * damping_ratio * np.sqrt(max(k_end, 1e-9) * reference_mass_kg) * (1 - solimp[1])
     params = SoftContactParams(float(stiffness), float(damping), tuple(float(x) for x in solimp))
     rms = float(np.sqrt(np.mean((params.force(d) - f) ** 2)))
-    return params, rms
+    return SoftContactFit(params, rms, status)
