@@ -30,6 +30,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import signal
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -81,15 +82,34 @@ class _Softhand(click.Group):
                        err=True)
             sys.exit(exc.exit_code)
         except (click.Abort, KeyboardInterrupt):
-            click.echo("interrupted (Ctrl-C); nothing was written", err=True)
-            sys.exit(EXIT_INTERRUPTED)
+            _interrupted()
         except Exception as exc:
+            if _caused_by_interrupt(exc):  # e.g. Ctrl-C during a lazy import, wrapped by it
+                _interrupted()
             if os.environ.get("SOFTHAND_TRACEBACK"):
                 raise
             click.echo(f"internal error: {type(exc).__name__}: {exc} "
                        "(SOFTHAND_TRACEBACK=1 shows where)", err=True)
             sys.exit(1)
         sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+def _interrupted() -> NoReturn:
+    """Ctrl-C: one line, exit 130; a second Ctrl-C while exiting is ignored."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    click.echo("interrupted (Ctrl-C); nothing was written", err=True)
+    sys.stdout.flush()
+    sys.exit(EXIT_INTERRUPTED)
 
 
 class Number(click.ParamType):
@@ -655,5 +675,23 @@ def bench_calibration(out_dir, skins) -> None:
     click.echo(run_calibration_benchmark(out, skins=list(dict.fromkeys(skins)) or None))
 
 
+def run() -> None:
+    """The ``softhand`` console script: :data:`main`, and an exit 130 that stays 130.
+
+    CPython exits by SIGINT (status -2) after a handled Ctrl-C when the interrupt first surfaced
+    inside code that C evaluated with ``PyRun_*`` (a Cython module being imported, for one), even
+    though the program then exits with its own status. So after Ctrl-C the process flushes its
+    output and ends with ``os._exit(130)``; what had to be written is closed by then.
+    """
+    try:
+        main()
+    except SystemExit as exc:
+        if exc.code == EXIT_INTERRUPTED:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(EXIT_INTERRUPTED)
+        raise
+
+
 if __name__ == "__main__":  # pragma: no cover
-    main()
+    run()

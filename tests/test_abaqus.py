@@ -18,7 +18,6 @@ from softhand.fem.abaqus import (
     face_label,
     inp_text,
     write_deck,
-    write_inp,
 )
 from softhand.fem.geometry import parse_design
 from softhand.fem.mesh import Mesh, build_mesh
@@ -317,9 +316,9 @@ def test_elastic_only_and_no_hold() -> None:
     assert len(find(blocks, "STEP")) == 1 and len(find(blocks, "VISCO")) == 1
 
 
-def test_write_inp_equals_inp_text(tmp_path) -> None:
+def test_written_deck_equals_inp_text(tmp_path) -> None:
     path = tmp_path / "sub" / "deck.inp"
-    out = write_inp("pocket1-pu-sil", path, COARSE, depth_mm=2.0)
+    out = write_deck("pocket1-pu-sil", path, COARSE, fmt="inp", depth_mm=2.0).path
     assert out == path
     assert path.read_text(encoding="utf-8") == inp_text("pocket1-pu-sil", COARSE, depth_mm=2.0)
     assert sorted(p.name for p in path.parent.iterdir()) == ["deck.inp"]
@@ -353,10 +352,6 @@ def test_invalid_calls_raise_before_any_run_and_leave_no_file(tmp_path, monkeypa
     with pytest.raises(ValueError, match=needle):
         write_deck(design, path, settings, fmt=fmt, depth_mm=depth)
     assert list(tmp_path.iterdir()) == []
-    if fmt == "inp":
-        with pytest.raises(ValueError, match=needle):
-            write_inp(design, path, settings, depth_mm=depth)
-        assert not path.exists()
 
 
 def test_a_folder_as_path_is_refused(tmp_path, monkeypatch) -> None:

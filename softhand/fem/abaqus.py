@@ -52,8 +52,7 @@ from softhand.fem.solver import IndentationSettings, Status, indent
 from softhand.io import atomic_write_text
 
 __all__ = ["C3D20_FACES", "C3D20_NATURAL", "DIALECTS", "ELEMENT_TYPES", "FORMATS", "DeckInfo",
-           "c3d20_connectivity", "corner_volumes", "face_label", "inp_text", "write_deck",
-           "write_inp"]
+           "c3d20_connectivity", "corner_volumes", "face_label", "inp_text", "write_deck"]
 
 Dialect = Literal["abaqus", "calculix"]
 DeckFormat = Literal["inp", "ccx"]
@@ -476,10 +475,3 @@ def write_deck(design: str | Design, path: str | os.PathLike,
     depth, source, note = _travel(core, depth, progress)
     atomic_write_text(target, _render(core, FORMATS[fmt], depth, note))
     return DeckInfo(target, fmt, depth, source)  # type: ignore[arg-type]
-
-
-def write_inp(design: str | Design, path: str | os.PathLike,
-              settings: IndentationSettings | None = None, *,
-              depth_mm: float | None = None) -> Path:
-    """The Abaqus deck of :func:`write_deck` (``fmt="inp"``); returns the path."""
-    return write_deck(design, path, settings, fmt="inp", depth_mm=depth_mm).path
