@@ -681,12 +681,16 @@ def run() -> None:
     CPython exits by SIGINT (status -2) after a handled Ctrl-C when the interrupt first surfaced
     inside code that C evaluated with ``PyRun_*`` (a Cython module being imported, for one), even
     though the program then exits with its own status. So after Ctrl-C the process flushes its
-    output and ends with ``os._exit(130)``; what had to be written is closed by then.
+    output, runs the exit handlers and ends with ``os._exit(130)``; what had to be written is
+    closed by then.
     """
     try:
         main()
     except SystemExit as exc:
         if exc.code == EXIT_INTERRUPTED:
+            import atexit
+
+            atexit._run_exitfuncs()  # what a normal exit runs (e.g. multiprocessing's clean-up)
             sys.stdout.flush()
             sys.stderr.flush()
             os._exit(EXIT_INTERRUPTED)
