@@ -289,7 +289,7 @@ def _material_lines(name: str, s: IndentationSettings, min_alpha: float = 0.0) -
     head = f"*HYPERFOAM, N={len(mu)}"
     if prony is not None:
         if s.moduli == "long-term":
-            mu = tuple(m * prony.long_term_ratio for m in mu)
+            mu = tuple(m * prony.g_inf for m in mu)
         head += ", MODULI=" + ("LONG TERM" if s.moduli == "long-term" else "INSTANTANEOUS")
     data = [_num(v) for pair in zip(mu, alpha, strict=True) for v in pair]
     data += [_num(law.nu)] * len(mu)
@@ -298,7 +298,7 @@ def _material_lines(name: str, s: IndentationSettings, min_alpha: float = 0.0) -
         lines.append("** g_i, k_i = g_i (hyperfoam: equal shear and bulk relaxation), tau_i (s)")
         lines.append("*VISCOELASTIC, TIME=PRONY")
         lines += [f"{_num(g)}, {_num(g)}, {_num(t)}"
-                  for g, t in zip(prony.g, prony.tau, strict=True)]
+                  for g, t in zip(prony.g, prony.tau_s, strict=True)]
     return lines
 
 

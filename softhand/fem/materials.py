@@ -260,32 +260,37 @@ class Hyperfoam:
 
 @dataclass(frozen=True)
 class Prony:
-    """Prony relaxation function g(t) = 1 - sum g_k (1 - exp(-t/tau_k)) (paper eq. 5).
+    """Prony relaxation function g(t) = 1 - sum g_k (1 - exp(-t/tau_k)) (paper eq. 5), the one
+    relaxation function of softhand: it relaxes the FE stress here and the force of the skin
+    laws (:mod:`softhand.laws.qlv`, where it is the normalised G(t) of quasi-linear
+    viscoelasticity). ``Prony()`` is no relaxation.
 
     Attributes:
         g: relaxation ratios g_k, each >= 0, with sum(g) < 1.
-        tau: relaxation times tau_k in seconds, each > 0.
+        tau_s: relaxation times tau_k in seconds, each > 0, as many as ``g``.
     """
 
-    g: tuple[float, ...]
-    tau: tuple[float, ...]
+    g: tuple[float, ...] = ()
+    tau_s: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         g = tuple(float(v) for v in self.g)
-        tau = tuple(float(v) for v in self.tau)
+        tau = tuple(float(v) for v in self.tau_s)
         object.__setattr__(self, "g", g)
-        object.__setattr__(self, "tau", tau)
+        object.__setattr__(self, "tau_s", tau)
         if len(g) != len(tau):
-            raise ValueError(f"g has {len(g)} terms and tau has {len(tau)}: need the same number")
+            raise ValueError(f"g has {len(g)} terms and tau_s has {len(tau)}: need the same number")
         for k, v in enumerate(g):
             if not np.isfinite(v) or v < 0.0:
-                raise ValueError(f"g[{k}] = {v!r} must be finite and >= 0")
+                raise ValueError(f"g[{k}] = {v!r}: each g_i must be finite and >= 0")
         if sum(g) >= 1.0:
             raise ValueError(f"sum(g) = {sum(g)!r} must be < 1 (allowed range [0, 1))")
-        _check_positive("tau (s)", tau)
+        for k, v in enumerate(tau):
+            if not np.isfinite(v) or v <= 0.0:
+                raise ValueError(f"tau_s[{k}] = {v!r}: each tau_i must be finite and > 0 s")
 
     @property
-    def long_term_ratio(self) -> float:
+    def g_inf(self) -> float:
         """g(inf) = 1 - sum(g): long-term modulus over instantaneous modulus."""
         return 1.0 - sum(self.g)
 
@@ -293,9 +298,53 @@ class Prony:
         """Relaxation function g(t) for times t >= 0 (s)."""
         t = np.asarray(t, dtype=float)
         out = np.ones_like(t)
-        for gk, tk in zip(self.g, self.tau, strict=True):
+        for gk, tk in zip(self.g, self.tau_s, strict=True):
             out -= gk * -np.expm1(-t / tk)
         return out
+
+    def step_factors(self, dt_s) -> tuple[np.ndarray, np.ndarray]:
+        """The one hereditary recursion's coefficients over steps ``dt_s`` (scalar or array).
+
+        For each term k and x = dt / tau_k: the decay e^{-x} and the ramp weight (1 - e^{-x}) / x
+        (-> 1 as dt -> 0). A history h_k obeys h_k <- e^{-x} h_k + (1 - e^{-x}) / x * du for an
+        input that changes by du linearly over the step: exact for piecewise-linear inputs
+        (Simo's recursion; the FE stress update and the QLV force both use it).
+
+        Returns:
+            (decay, ramp), each of shape ``(n_terms, *shape(dt_s))``.
+        """
+        dt = np.asarray(dt_s, dtype=float)
+        x = dt[None, ...] / np.asarray(self.tau_s, dtype=float).reshape((-1,) + (1,) * dt.ndim)
+        return np.exp(-x), phi1(-x)
+
+    def to_dict(self) -> dict:
+        return {"g": list(self.g), "tau_s": list(self.tau_s), "g_inf": self.g_inf}
+
+    @classmethod
+    def from_dict(cls, d: Any, *, key: str = "prony") -> Prony:
+        """Parse :meth:`to_dict` output, checking every value.
+
+        Args:
+            d: mapping with ``g`` (numbers in [0, 1), sum < 1), ``tau_s`` (as many numbers > 0)
+                and optionally ``g_inf`` (must equal 1 - sum(g) within 1e-6).
+            key: key path of ``d`` in messages.
+
+        Raises:
+            ValueError: ``"{key}.tau_s[0] = -1.0: expected a finite number > 0"`` and the like.
+        """
+        check_mapping(key, d, required=("g", "tau_s"), optional=("g_inf",))
+        g = check_numbers(join(key, "g"), d["g"], lo=0.0, hi=1.0, hi_open=True)
+        tau = check_numbers(join(key, "tau_s"), d["tau_s"], length=len(g), lo=0.0, lo_open=True,
+                            why=f"(as many as {join(key, 'g')})")
+        if sum(g) >= 1:
+            raise ValueError(f"{join(key, 'g')} = {show(list(g))}: the sum {sum(g):.6g} must be "
+                             "< 1 (g_inf > 0)")
+        if "g_inf" in d:
+            g_inf = check_number(join(key, "g_inf"), d["g_inf"], lo=0.0, hi=1.0, lo_open=True)
+            if abs(g_inf - (1.0 - sum(g))) > 1e-6:
+                raise ValueError(f"{join(key, 'g_inf')} = {show(d['g_inf'])}: expected "
+                                 f"1 - sum(g) = {1.0 - sum(g):.9g}")
+        return cls(g, tau)
 
 
 @dataclass
@@ -323,7 +372,7 @@ class Material:
     """A skin material: instantaneous hyperfoam response plus optional Prony relaxation.
 
     ``hyperfoam`` always holds the *instantaneous* law (t = 0+); the long-term law is that times
-    ``prony.long_term_ratio``.
+    ``prony.g_inf``.
     """
 
     name: str
@@ -339,7 +388,7 @@ class Material:
         """The same material without relaxation, at its long-term (fully relaxed) stiffness."""
         if self.prony is None:
             return self
-        return Material(self.name, self.hyperfoam.scaled(self.prony.long_term_ratio), None,
+        return Material(self.name, self.hyperfoam.scaled(self.prony.g_inf), None,
                         "long-term")
 
     def update(self, C: np.ndarray, state: ViscoState | None, dt: float):
@@ -358,13 +407,11 @@ class Material:
         H = np.empty_like(state.H)
         S = S0.copy()
         factor = 1.0
-        for k, (gk, tk) in enumerate(zip(self.prony.g, self.prony.tau, strict=True)):
-            x = dt / tk
-            decay = np.exp(-x)
-            gamma = phi1(-x)  # (1 - e^{-x}) / x, -> 1 as dt -> 0
-            H[k] = decay * state.H[k] + gamma * dS0
+        decay, gamma = self.prony.step_factors(dt)
+        for k, gk in enumerate(self.prony.g):
+            H[k] = decay[k] * state.H[k] + gamma[k] * dS0
             S -= gk * (S0 - H[k])
-            factor -= gk * (1.0 - gamma)
+            factor -= gk * (1.0 - gamma[k])
         return S, factor * D0, ViscoState(S0, H)
 
 
@@ -478,5 +525,5 @@ def material(
         return Material(name, law, None, moduli)
     prony = Prony(tuple(row["g"]), tuple(row["tau_s"]))
     if moduli == "long-term":
-        law = law.scaled(1.0 / prony.long_term_ratio)
+        law = law.scaled(1.0 / prony.g_inf)
     return Material(name, law, prony, moduli)
