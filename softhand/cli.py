@@ -28,12 +28,9 @@ shipped ``calibration/`` needs the full set of designs or skins, or ``--force``.
 from __future__ import annotations
 
 import json
-import math
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -41,15 +38,26 @@ import click
 import numpy as np
 
 from softhand import __version__
+from softhand.cli_inputs import (
+    EXIT_INPUT,
+    EXPORT_OPTIONS,
+    FE_OPTIONS,
+    OPT_THREADS,
+    Number,
+    bad,
+    checked_dir,
+    checked_file,
+    designs_of,
+    guard_shipped,
+    make_settings,
+    parse_skin_overrides,
+    progress_bar,
+    shipped_settings_differ,
+    with_options,
+)
 from softhand.paths import FE_DIR, REPORTS_DIR, SKINS_DIR, is_shipped
 
-EXIT_INPUT, EXIT_CONVERGENCE, EXIT_INTERRUPTED = 2, 3, 130
-
-
-class InputError(click.ClickException):
-    """Bad input found before any work: one line, exit status 2."""
-
-    exit_code = EXIT_INPUT
+EXIT_CONVERGENCE, EXIT_INTERRUPTED = 3, 130
 
 
 class Stopped(click.ClickException):
@@ -58,10 +66,6 @@ class Stopped(click.ClickException):
     def __init__(self, message: str, exit_code: int) -> None:
         super().__init__(message)
         self.exit_code = exit_code
-
-
-def _bad(message: str) -> NoReturn:
-    raise InputError(message)
 
 
 class _Softhand(click.Group):
@@ -112,203 +116,6 @@ def _interrupted() -> NoReturn:
     sys.exit(EXIT_INTERRUPTED)
 
 
-class Number(click.ParamType):
-    """A finite number in a range; the message names the range and its unit."""
-
-    name = "number"
-
-    def __init__(self, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
-                 hi_open: bool = False, unit: str = "") -> None:
-        self.lo, self.hi, self.lo_open, self.hi_open, self.unit = lo, hi, lo_open, hi_open, unit
-
-    @property
-    def allowed(self) -> str:
-        left = "" if self.lo is None else f"{self.lo:g} {'<' if self.lo_open else '<='} "
-        right = "" if self.hi is None else f" {'<' if self.hi_open else '<='} {self.hi:g}"
-        return f"{left}x{right}" + (f" {self.unit}" if self.unit else "")
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            v = value
-        else:
-            try:
-                v = float(value)
-            except (TypeError, ValueError):
-                self.fail(f"{value!r} is not a number; allowed {self.allowed}", param, ctx)
-        below = self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo)
-        above = self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi)
-        if not math.isfinite(v) or below or above:
-            self.fail(f"{value!r} is outside the allowed range {self.allowed}", param, ctx)
-        return v
-
-
-def _checked_dir(path: str | None, flag: str) -> Path | None:
-    from softhand.io import check_writable_dir
-
-    if path is None:
-        return None
-    try:
-        return check_writable_dir(path, name=flag)
-    except ValueError as exc:
-        _bad(str(exc))
-
-
-def _checked_file(path: str | None, flag: str, suffix: str) -> Path | None:
-    from softhand.io import check_writable_file
-
-    if path is None:
-        return None
-    try:
-        return check_writable_file(path, suffix=suffix, name=flag)
-    except ValueError as exc:
-        _bad(str(exc))
-
-
-def _guard_shipped(out: Path, *, complete: bool, force: bool, what: str) -> None:
-    """Refuse to write an incomplete set into the shipped calibration unless ``--force``."""
-    if is_shipped(out) and not complete and not force:
-        _bad(f"--out {str(out)!r} is shipped calibration data and this run would replace it with "
-             f"{what}; write elsewhere with --out DIR, or add --force")
-
-
-@contextmanager
-def _progress(desc: str, *, disable: bool) -> Iterator[Callable[[float], None]]:
-    """A percent progress bar on stderr, closed (its line ended) before anything else prints."""
-    from tqdm import tqdm
-
-    bar = tqdm(total=100, desc=desc, unit="%", disable=disable, file=sys.stderr)
-
-    def update(frac: float) -> None:
-        bar.update(round(100 * frac) - bar.n)
-
-    try:
-        yield update
-    finally:
-        bar.close()
-
-
-# --- FE options -----------------------------------------------------------------------------
-
-_OPT_MESH = click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),
-                         default="default", show_default=True,
-                         help="Mesh: default is graded to the pocket ends; fine doubles every count.")
-_OPT_MODE = click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d",
-                         show_default=True,
-                         help="3D quarter model, or fast 2D plane-strain cross-section.")
-_OPT_ELASTIC = click.option("--elastic-only", is_flag=True,
-                            help="Hyperfoam only, no Prony relaxation (no hold).")
-_OPT_MODULI = click.option("--moduli", type=click.Choice(["long-term", "instantaneous"]),
-                           default="long-term", show_default=True,
-                           help="How Table 3 moduli are read.")
-_OPT_HOLD = click.option("--hold", "hold_s", type=Number(0, 600, unit="s"), default=10.0,
-                         show_default=True, help="Hold after the ramp, 0-600 s.")
-_OPT_SPEED = click.option("--speed", "speed_mm_s", type=Number(0, 100, lo_open=True, unit="mm/s"),
-                          default=0.5, show_default=True, help="Plate speed, (0, 100] mm/s.")
-_OPT_FORCE = click.option("--max-force", "max_force_N",
-                          type=Number(0, 50, lo_open=True, unit="N"), default=2.0,
-                          show_default=True, help="Force that ends the ramp, (0, 50] N.")
-_OPT_DEPTH = click.option("--max-depth", "max_depth_mm",
-                          type=Number(0, 7, lo_open=True, unit="mm"), default=6.0,
-                          show_default=True,
-                          help="Plate travel that ends the ramp if the force is not reached "
-                               "first, (0, 7] mm (the phalanx is 9 mm high).")
-_OPT_GEOMETRY = click.option("--geometry", multiple=True, metavar="KEY=VALUE",
-                             help="Override a geometry field, e.g. pocket_roof_mm=1.5 (repeatable).")
-_OPT_MATERIALS = click.option("--materials", "materials_path",
-                              help="JSON file with material constants replacing Table 3, "
-                                   "e.g. {\"sil\": {\"mu_MPa\": [0.08, 0.01]}}.")
-_OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None,
-                            help="Cores to use [default: the CPUs this process may run on, at "
-                                 "most 4]. One FE run: element threads; a sweep or calibration: "
-                                 "designs or skins at once. BLAS stays single-threaded.")
-
-FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
-              _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, _OPT_THREADS)
-EXPORT_OPTIONS = (_OPT_MESH, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
-                  _OPT_GEOMETRY, _OPT_MATERIALS, _OPT_THREADS)
-
-
-def _options(options):
-    def apply(f):
-        for opt in reversed(options):
-            f = opt(f)
-        return f
-
-    return apply
-
-
-def _parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            _bad(f"--geometry {item!r}: expected KEY=VALUE, e.g. pocket_roof_mm=1.5")
-        try:
-            number = float(value)
-        except ValueError:
-            _bad(f"--geometry {item!r}: {value!r} is not a number")
-        if not math.isfinite(number):
-            _bad(f"--geometry {item!r}: {value!r} is not a finite number")
-        out[key.strip()] = number
-    return out
-
-
-def _load_materials(path: str | None) -> dict[str, dict]:
-    if path is None:
-        return {}
-    if not str(path).strip():
-        _bad("--materials '': expected a JSON file path, got an empty string")
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        _bad(f"--materials {path!r}: cannot be read ({exc.__class__.__name__}: {exc})")
-    except json.JSONDecodeError as exc:
-        _bad(f"--materials {path!r}: not JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})")
-    if not isinstance(data, dict):
-        _bad(f"--materials {path!r}: expected an object keyed by material name (sil, pu), "
-             f"got {type(data).__name__}")
-    return data
-
-
-def _designs(names) -> list[str]:
-    from softhand.fem.geometry import parse_design
-
-    out = []
-    for name in names:
-        try:
-            out.append(parse_design(name).name)
-        except ValueError as exc:
-            _bad(str(exc))
-    return out
-
-
-def _make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **kw):
-    """IndentationSettings from the FE options, every error naming its flag."""
-    from dataclasses import replace
-
-    from softhand.fem.geometry import parse_design
-    from softhand.fem.solver import IndentationSettings
-
-    try:
-        settings = IndentationSettings(mode=mode, **kw)
-    except ValueError as exc:  # the option types already checked each number
-        _bad(str(exc))
-    materials = _load_materials(materials_path)
-    try:
-        settings = replace(settings, materials=materials)
-    except ValueError as exc:
-        _bad(f"--materials {materials_path!r}: {exc}")
-    geom = _parse_geometry(geometry)
-    items = " ".join(geometry)
-    try:
-        settings = replace(settings, geometry=geom)
-        for name in designs:
-            parse_design(name).geometry(**geom)
-    except ValueError as exc:
-        _bad(f"--geometry {items}: {exc}")
-    return settings
-
-
 @click.group(cls=_Softhand)
 @click.version_option(__version__, prog_name="softhand")
 def main() -> None:
@@ -322,7 +129,7 @@ def fe() -> None:
 
 @fe.command("indent")
 @click.argument("design")
-@_options(FE_OPTIONS)
+@with_options(FE_OPTIONS)
 @click.option("--out", "out_dir", help="Write the curve CSV and summary JSON into this folder.")
 @click.option("--force", is_flag=True, help="Allow --out inside the shipped calibration/.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
@@ -331,13 +138,13 @@ def fe_indent(design, out_dir, force, as_json, **kw) -> None:
     from softhand.fem.solver import ConvergenceError, Status, indent
     from softhand.fem.sweep import write_results
 
-    (name,) = _designs([design])
-    settings = _make_settings([name], **kw)
-    out = _checked_dir(out_dir, "--out")
+    (name,) = designs_of([design])
+    settings = make_settings([name], **kw)
+    out = checked_dir(out_dir, "--out")
     if out is not None:
-        _guard_shipped(out, complete=False, force=force, what=f"one design ({name})")
+        guard_shipped(out, complete=False, force=force, what=f"one design ({name})")
     try:
-        with _progress(name, disable=as_json) as progress:
+        with progress_bar(name, disable=as_json) as progress:
             result = indent(name, settings, progress=progress)
     except ConvergenceError as exc:
         raise Stopped(f"error: {exc}", EXIT_CONVERGENCE) from None
@@ -372,19 +179,6 @@ def _print_result(s: dict[str, Any]) -> None:
                f"{s['newton_iterations']} Newton iterations, {s['wall_s']:.1f} s")
 
 
-def _shipped_settings_differ(out: Path, settings) -> list[str]:
-    """Settings of ``settings`` that differ from those the folder's summary.json records."""
-    from dataclasses import asdict
-
-    path = out / "summary.json"
-    try:
-        old = json.loads(path.read_text(encoding="utf-8"))["provenance"]["settings"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return []
-    new = json.loads(json.dumps(asdict(settings)))
-    return sorted(k for k in new if k != "threads" and k in old and old[k] != new[k])
-
-
 def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[str, str],
                   interrupted: bool) -> None:
     """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing."""
@@ -399,7 +193,7 @@ def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[
 
 
 @fe.command("sweep")
-@_options(FE_OPTIONS)
+@with_options(FE_OPTIONS)
 @click.option("--out", "out_dir", default=str(FE_DIR), show_default=True,
               help="Folder for curves, summary.json and curves.png.")
 @click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
@@ -411,13 +205,13 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
     from softhand.fem.sweep import paper_error_table, run_sweep, write_results
     from softhand.io import interrupts_deferred
 
-    names = _designs(dict.fromkeys(designs or DESIGNS))
-    settings = _make_settings(names, threads=None, **kw)
-    out = _checked_dir(out_dir, "--out")
-    _guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
+    names = designs_of(dict.fromkeys(designs or DESIGNS))
+    settings = make_settings(names, threads=None, **kw)
+    out = checked_dir(out_dir, "--out")
+    guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
                    what=f"{len(names)} of the 12 designs")
-    if is_shipped(out) and not force and (diff := _shipped_settings_differ(out, settings)):
-        _bad(f"--out {str(out)!r} is shipped calibration data made with other settings "
+    if is_shipped(out) and not force and (diff := shipped_settings_differ(out, settings)):
+        bad(f"--out {str(out)!r} is shipped calibration data made with other settings "
              f"({', '.join(diff)}); write elsewhere with --out DIR, or add --force")
     batch = run_sweep(names, settings, threads=threads)
     missing = {n: "interrupted" for n in batch.missing}
@@ -442,20 +236,20 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
 @click.option("--depth", "depth_mm", type=Number(0, 7, lo_open=True, unit="mm"), default=None,
               help="Plate travel of the ramp, (0, 7] mm [default: the travel at which softhand's "
                    "own run of this model reaches --max-force, found by running it].")
-@_options(EXPORT_OPTIONS)
+@with_options(EXPORT_OPTIONS)
 def fe_export(design, out, fmt, depth_mm, **kw) -> None:
     """Write DESIGN as an Abaqus (.inp) or CalculiX (.inp) input deck to OUT."""
     from softhand.fem.abaqus import write_deck
 
-    (name,) = _designs([design])
-    settings = _make_settings([name], **kw)
-    path = _checked_file(out, "OUT", ".inp")
-    with _progress(f"{name}: plate travel", disable=depth_mm is not None) as progress:
+    (name,) = designs_of([design])
+    settings = make_settings([name], **kw)
+    path = checked_file(out, "OUT", ".inp")
+    with progress_bar(f"{name}: plate travel", disable=depth_mm is not None) as progress:
         try:
             info = write_deck(name, path, settings, fmt=fmt, depth_mm=depth_mm,
                               progress=progress)
         except ValueError as exc:
-            _bad(str(exc))
+            bad(str(exc))
     source = ("--depth" if info.depth_source == "given"
               else f"softhand's own travel to --max-force {settings.max_force_N:g} N")
     click.echo(f"wrote {info.path} ({fmt}, plate travel {info.depth_mm:.4g} mm: {source})")
@@ -470,7 +264,7 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
               help="Folder for the calibration files.")
 @click.option("--fe-dir", default=str(FE_DIR), show_default=True,
               help="Folder with the FE curves (as written by `softhand fe sweep`).")
-@_options((_OPT_THREADS,))
+@with_options((OPT_THREADS,))
 @click.option("--force", is_flag=True,
               help="Allow writing a subset of skins or representations into the shipped "
                    "calibration/.")
@@ -485,17 +279,17 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     names = list(dict.fromkeys(skins)) or known
     for n in names:
         if n not in known:
-            _bad(f"skin {n!r} is unknown; allowed: {', '.join(known)}")
+            bad(f"skin {n!r} is unknown; allowed: {', '.join(known)}")
     reps = tuple(dict.fromkeys(representations)) or REPRESENTATIONS
     for r in reps:
         if r not in REPRESENTATIONS:
-            _bad(f"--representation {r!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
-    out = _checked_dir(out_dir, "--out")
-    _guard_shipped(out, complete=set(names) == set(known) and set(reps) == set(REPRESENTATIONS),
+            bad(f"--representation {r!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
+    out = checked_dir(out_dir, "--out")
+    guard_shipped(out, complete=set(names) == set(known) and set(reps) == set(REPRESENTATIONS),
                    force=force, what=f"{len(names)} of {len(known)} skins and "
                                      f"{len(reps)} of {len(REPRESENTATIONS)} representations")
     if not str(fe_dir).strip():
-        _bad("--fe-dir '': expected a folder path, got an empty string")
+        bad("--fe-dir '': expected a folder path, got an empty string")
     from softhand.fem.geometry import DESIGNS
 
     for n in names:  # every FE curve is read and checked before the first fit
@@ -503,22 +297,12 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
             try:
                 fe_curves(n, fe_dir)
             except (FileNotFoundError, ValueError) as exc:
-                _bad(f"--fe-dir {fe_dir!r}: {exc}")
+                bad(f"--fe-dir {fe_dir!r}: {exc}")
     run = calibrate_many(names, reps, out_dir=out, fe_dir=fe_dir, threads=threads,
                          show_progress=not as_json)
     if run.index is not None:
         click.echo(json.dumps(run.index, indent=1) if as_json else summary_table(run.index))
     _end_of_batch("skins", len(run.written), len(names), out, run.missing, run.interrupted)
-
-
-def _parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
-    out: dict[str, str] = {}
-    for item in items:
-        region, sep, design = item.partition("=")
-        if not sep or not region.strip() or not design.strip():
-            _bad(f"--skin {item!r}: expected REGION=DESIGN (e.g. Palm1=pocket2-sil)")
-        out[region.strip()] = design.strip()
-    return out
 
 
 @main.command("handshake")
@@ -541,17 +325,15 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
-    from softhand.envs.skins import parse_skins
 
     if design is not None and not design.strip():
-        _bad("--design '': expected a skin name, e.g. pocket2-sil")
-    overrides = _parse_skin_overrides(skin_items)
-    record = _checked_file(record_path, "--record", ".rrd")
+        bad("--design '': expected a skin name, e.g. pocket2-sil")
+    overrides = parse_skin_overrides(skin_items)
+    record = checked_file(record_path, "--record", ".rrd")
     try:  # skins and their calibration files, before the episode
-        parse_skins(design, overrides)
         env = HandshakeEnv(design=design, skins=overrides, timestep_s=timestep_s)
     except ValueError as exc:
-        _bad(str(exc))
+        bad(str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)
     if record is not None:
         from softhand.bench.handshake import frames_of
@@ -611,12 +393,12 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     from softhand.viz.render import CameraView, render_state
 
     if design is not None and not design.strip():
-        _bad("--design '': expected a skin name, e.g. pocket2-sil")
-    path = _checked_file(out, "OUT", ".png")
+        bad("--design '': expected a skin name, e.g. pocket2-sil")
+    path = checked_file(out, "OUT", ".png")
     try:
         env = HandshakeEnv(design=design)
     except ValueError as exc:
-        _bad(str(exc))
+        bad(str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)
     if at_s is None:
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]
@@ -646,7 +428,7 @@ def bench_fe(out_dir, quick) -> None:
     """Time one 3D design (idle and next to CPU load), the sweeps and 2D; errors vs fine mesh."""
     from softhand.bench.fe import run_fe_benchmark
 
-    click.echo(run_fe_benchmark(_checked_dir(out_dir, "--out"), quick=quick))
+    click.echo(run_fe_benchmark(checked_dir(out_dir, "--out"), quick=quick))
 
 
 @bench.command("handshake")
@@ -655,7 +437,7 @@ def bench_handshake(out_dir) -> None:
     """Handshake speed (recording off/on, 0.5-2 ms) and the skins side by side."""
     from softhand.bench.handshake import run_handshake_benchmark
 
-    click.echo(run_handshake_benchmark(_checked_dir(out_dir, "--out")))
+    click.echo(run_handshake_benchmark(checked_dir(out_dir, "--out")))
 
 
 @bench.command("calibration")
@@ -667,11 +449,11 @@ def bench_calibration(out_dir, skins) -> None:
     from softhand.bench.calibration import run_calibration_benchmark
     from softhand.skin.files import shipped_skins
 
-    out = _checked_dir(out_dir, "--out")
+    out = checked_dir(out_dir, "--out")
     known = shipped_skins()
     for s in skins:
         if s not in known:
-            _bad(f"--skin {s!r} has no shipped calibration; allowed: {', '.join(known)}")
+            bad(f"--skin {s!r} has no shipped calibration; allowed: {', '.join(known)}")
     click.echo(run_calibration_benchmark(out, skins=list(dict.fromkeys(skins)) or None))
 
 

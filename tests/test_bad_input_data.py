@@ -20,7 +20,7 @@ from softhand.fem.geometry import GEOMETRY_RANGES, PhalanxGeometry, parse_design
 from softhand.fem.materials import check_materials, material
 from softhand.fem.mesh import MESH_LEVELS, build_mesh
 from softhand.laws.fit import load_curve
-from softhand.skin.files import SHIPPED_DIR, load_calibration
+from softhand.skin.files import SKINS_DIR, load_calibration
 
 NAN, INF = math.nan, math.inf
 
@@ -229,8 +229,8 @@ def test_valid_curve_files_still_load(tmp_path):
     assert curve.time_s.tolist() == [0.0, 0.04, 0.08, 1.0] and curve.hold.tolist()[-1]
     path.write_text("hold,force_N,displacement_mm,time_s\n0,0,0,0\n0,0.1,0.1,1\n1,0.09,0.1,2")
     assert load_curve(path).force_N.tolist() == [0.0, 0.1, 0.09]  # any column order, no last \n
-    shipped = SHIPPED_DIR.parent / "fe" / "pocket2-sil.csv"
-    cal = json.loads((SHIPPED_DIR / "pocket2-sil.json").read_text())
+    shipped = SKINS_DIR.parent / "fe" / "pocket2-sil.csv"
+    cal = json.loads((SKINS_DIR / "pocket2-sil.json").read_text())
     assert load_curve(shipped).sha256 == cal["law"]["source"]["curves"]["pocket2-sil@0.5mm/s"]
 
 
@@ -238,7 +238,7 @@ def test_valid_curve_files_still_load(tmp_path):
 
 
 def _shipped(name: str = "pocket2-sil") -> dict:
-    return json.loads((SHIPPED_DIR / f"{name}.json").read_text())
+    return json.loads((SKINS_DIR / f"{name}.json").read_text())
 
 
 def _set(data: dict, path: tuple, value) -> dict:
@@ -314,7 +314,7 @@ def test_missing_representation_and_the_env_name_file_skin_and_key(tmp_path):
     from softhand.envs import HandshakeEnv
     from softhand.envs.skins import series_law
 
-    for f in SHIPPED_DIR.glob("*.json"):
+    for f in SKINS_DIR.glob("*.json"):
         shutil.copy(f, tmp_path / f.name)
     data = _set(_shipped(), ("representations", "soft-contact"), KeyError)
     (tmp_path / "pocket2-sil.json").write_text(json.dumps(data))

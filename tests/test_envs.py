@@ -20,7 +20,7 @@ from softhand.envs.run import (
     sphere_overlap_area,
 )
 from softhand.envs.skins import SKIN_CHOICES, parse_skins
-from softhand.skin.files import SHIPPED_DIR
+from softhand.skin.files import SKINS_DIR
 
 
 def _rollout(env: HandshakeEnv, seed: int) -> tuple[np.ndarray, float]:
@@ -140,7 +140,7 @@ def test_partner_joints_stay_within_their_ranges_under_a_5x_squeeze():
 
 
 def test_corrupt_calibration_file_names_the_file(tmp_path):
-    for f in SHIPPED_DIR.glob("*.json"):
+    for f in SKINS_DIR.glob("*.json"):
         shutil.copy(f, tmp_path / f.name)
     (tmp_path / "pocket2-sil.json").write_text("{ not json")
     with pytest.raises(ValueError, match="pocket2-sil"):

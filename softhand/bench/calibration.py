@@ -23,7 +23,7 @@ from softhand.skin.calibrate import (
     law_curve,
     loading_error,
 )
-from softhand.skin.files import FE_DIR, SHIPPED_DIR, load_calibration, shipped_skins
+from softhand.skin.files import FE_DIR, SKINS_DIR, load_calibration, shipped_skins
 from softhand.skin.rig import RigSettings, build_rig, run_rig
 
 __all__ = ["run_calibration_benchmark"]
@@ -39,7 +39,7 @@ def _record(name: str, cal):
 
 
 def run_calibration_benchmark(out_dir: str | Path = REPORTS_DIR, *, skins: list[str] | None = None,
-                              skin_dir: str | Path = SHIPPED_DIR) -> str:
+                              skin_dir: str | Path = SKINS_DIR) -> str:
     """Run the benchmark, write the report files, return the Markdown."""
     names = skins or shipped_skins(skin_dir)
     if not names:

@@ -26,7 +26,7 @@ from softhand.hands import (
     regions,
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
-from softhand.skin.files import SHIPPED_DIR
+from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
 __all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "MAX_ACTION_PERIOD_S",
@@ -157,7 +157,7 @@ class HandshakeEnv(gym.Env):
         self.skins = parse_skins(design, skins)
         self.frame_skip = int(frame_skip)
         self.randomize = bool(randomize)
-        directory = calibration_dir or SHIPPED_DIR
+        directory = calibration_dir or SKINS_DIR
         self.calibration_dir = str(directory)  # where the skins' laws came from
         for skin in sorted({*self.skins.values(), "rigid"}):
             series_law(skin, str(directory))  # reads and checks the file (cached)

@@ -25,7 +25,7 @@ from softhand.hands import partner_tissue_geoms, regions
 from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN, PROSTHETIC
 from softhand.skin.calibrate import CALIBRATION_MASS_KG, MASS_FACTORS, skin_names
-from softhand.skin.files import SHIPPED_DIR, load_calibration
+from softhand.skin.files import SKINS_DIR, load_calibration
 from softhand.skin.rig import pair_law_values
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
@@ -86,7 +86,7 @@ def _soft(skin: str, directory: str) -> SoftContactParams:
 
 
 @functools.lru_cache(maxsize=32)
-def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParams:
+def series_law(skin: str, directory: str = str(SKINS_DIR)) -> SoftContactParams:
     """The pair law of ``skin`` against human tissue (``rigid``: the tissue alone)."""
     tissue = _soft(HUMAN, directory)
     if skin == "rigid":
@@ -102,7 +102,7 @@ def series_law(skin: str, directory: str = str(SHIPPED_DIR)) -> SoftContactParam
 
 
 @functools.lru_cache(maxsize=32)
-def calibrated_max_force(skin: str, directory: str = str(SHIPPED_DIR)) -> float:
+def calibrated_max_force(skin: str, directory: str = str(SKINS_DIR)) -> float:
     """Largest normal force (N) of the data behind ``skin``'s pair law against human tissue.
 
     The pair law is the skin in series with the tissue, so it is calibrated up to the smaller of
@@ -128,7 +128,7 @@ def _invert(params: SoftContactParams, force_N: np.ndarray) -> np.ndarray:
 
 
 def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str], *,
-                    directory: str | Path = SHIPPED_DIR, pro: str = "pro_") -> list[str]:
+                    directory: str | Path = SKINS_DIR, pro: str = "pro_") -> list[str]:
     """Add the skin pairs (:func:`add_skin_pairs`) to ``spec`` with each region's pair law in
     their ``solref``/``solimp``; shell pairs get the ``rigid`` law (the tissue alone).
 

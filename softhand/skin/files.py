@@ -14,19 +14,18 @@ from softhand.io import atomic_write_json
 from softhand.paths import FE_DIR, SKINS_DIR
 from softhand.skin.calibrate import SkinCalibration
 
-__all__ = ["FE_DIR", "SHIPPED_DIR", "load_calibration", "save_calibration", "shipped_skins"]
-
-SHIPPED_DIR = SKINS_DIR  # the default folder of every command (softhand.paths)
+__all__ = ["FE_DIR", "SKINS_DIR", "load_calibration", "save_calibration", "shipped_skins"]
 
 
-def save_calibration(cal: SkinCalibration, out_dir: str | Path = SHIPPED_DIR) -> Path:
+
+def save_calibration(cal: SkinCalibration, out_dir: str | Path = SKINS_DIR) -> Path:
     """Write ``{design}.json`` atomically; return its path."""
     path = Path(out_dir) / f"{cal.design}.json"
     atomic_write_json(path, cal.to_dict())
     return path
 
 
-def load_calibration(design: str, directory: str | Path = SHIPPED_DIR, *,
+def load_calibration(design: str, directory: str | Path = SKINS_DIR, *,
                      require: tuple[str, ...] = ()) -> SkinCalibration:
     """Read one skin's calibration, checking every value; clear errors for a bad file.
 
@@ -55,7 +54,7 @@ def load_calibration(design: str, directory: str | Path = SHIPPED_DIR, *,
     return SkinCalibration.from_dict(data, source=str(path), skin=design, require=require)
 
 
-def shipped_skins(directory: str | Path = SHIPPED_DIR) -> list[str]:
+def shipped_skins(directory: str | Path = SKINS_DIR) -> list[str]:
     """Names of the skins calibrated in ``directory``."""
     d = Path(directory)
     return sorted(p.stem for p in d.glob("*.json") if p.stem != "index") if d.exists() else []

@@ -15,7 +15,7 @@ from softhand import __version__
 from softhand.io import atomic_write_json, interrupts_deferred
 from softhand.parallel import run_tasks
 from softhand.skin.calibrate import SkinCalibration, calibrate_skin
-from softhand.skin.files import FE_DIR, SHIPPED_DIR, save_calibration
+from softhand.skin.files import FE_DIR, SKINS_DIR, save_calibration
 
 __all__ = ["METRICS", "CalibrationRun", "calibrate_many", "summary_table"]
 
@@ -43,7 +43,7 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
     """
     from tqdm import tqdm
 
-    out = Path(out_dir) if out_dir else SHIPPED_DIR
+    out = Path(out_dir) if out_dir else SKINS_DIR
     fe = str(fe_dir) if fe_dir else str(FE_DIR)
     bar = tqdm(total=len(names), desc="calibrate", unit="skin", disable=not show_progress)
 
@@ -84,7 +84,7 @@ class CalibrationRun:
     interrupted: bool
 
 
-def rebuild_index(out: str | Path = SHIPPED_DIR,
+def rebuild_index(out: str | Path = SKINS_DIR,
                   representations: tuple[str, ...] | None = None, *,
                   missing: dict[str, str] | None = None) -> dict[str, Any]:
     """Write ``index.json`` from every calibration file in ``out``; return it."""

@@ -1,0 +1,251 @@
+"""The command line's inputs: typed options and their checks, before any work starts.
+
+Every check raises :class:`InputError` (one line ``error: ...`` naming the flag or file, the
+value and the allowed range; exit status 2). :mod:`softhand.cli` builds the commands from these.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import NoReturn
+
+import click
+
+from softhand.paths import is_shipped
+
+EXIT_INPUT = 2
+
+
+class InputError(click.ClickException):
+    """Bad input found before any work: one line, exit status 2."""
+
+    exit_code = EXIT_INPUT
+
+
+def bad(message: str) -> NoReturn:
+    raise InputError(message)
+
+
+class Number(click.ParamType):
+    """A finite number in a range; the message names the range and its unit."""
+
+    name = "number"
+
+    def __init__(self, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = "") -> None:
+        self.lo, self.hi, self.lo_open, self.hi_open, self.unit = lo, hi, lo_open, hi_open, unit
+
+    @property
+    def allowed(self) -> str:
+        left = "" if self.lo is None else f"{self.lo:g} {'<' if self.lo_open else '<='} "
+        right = "" if self.hi is None else f" {'<' if self.hi_open else '<='} {self.hi:g}"
+        return f"{left}x{right}" + (f" {self.unit}" if self.unit else "")
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float):
+            v = value
+        else:
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"{value!r} is not a number; allowed {self.allowed}", param, ctx)
+        below = self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo)
+        above = self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi)
+        if not math.isfinite(v) or below or above:
+            self.fail(f"{value!r} is outside the allowed range {self.allowed}", param, ctx)
+        return v
+
+
+def checked_dir(path: str | None, flag: str) -> Path | None:
+    from softhand.io import check_writable_dir
+
+    if path is None:
+        return None
+    try:
+        return check_writable_dir(path, name=flag)
+    except ValueError as exc:
+        bad(str(exc))
+
+
+def checked_file(path: str | None, flag: str, suffix: str) -> Path | None:
+    from softhand.io import check_writable_file
+
+    if path is None:
+        return None
+    try:
+        return check_writable_file(path, suffix=suffix, name=flag)
+    except ValueError as exc:
+        bad(str(exc))
+
+
+def guard_shipped(out: Path, *, complete: bool, force: bool, what: str) -> None:
+    """Refuse to write an incomplete set into the shipped calibration unless ``--force``."""
+    if is_shipped(out) and not complete and not force:
+        bad(f"--out {str(out)!r} is shipped calibration data and this run would replace it with "
+             f"{what}; write elsewhere with --out DIR, or add --force")
+
+
+@contextmanager
+def progress_bar(desc: str, *, disable: bool) -> Iterator[Callable[[float], None]]:
+    """A percent progress bar on stderr, closed (its line ended) before anything else prints."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=100, desc=desc, unit="%", disable=disable, file=sys.stderr)
+
+    def update(frac: float) -> None:
+        bar.update(round(100 * frac) - bar.n)
+
+    try:
+        yield update
+    finally:
+        bar.close()
+
+
+# --- FE options -----------------------------------------------------------------------------
+
+_OPT_MESH = click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),
+                         default="default", show_default=True,
+                         help="Mesh: default is graded to the pocket ends; fine doubles every count.")
+_OPT_MODE = click.option("--mode", type=click.Choice(["3d", "2d"]), default="3d",
+                         show_default=True,
+                         help="3D quarter model, or fast 2D plane-strain cross-section.")
+_OPT_ELASTIC = click.option("--elastic-only", is_flag=True,
+                            help="Hyperfoam only, no Prony relaxation (no hold).")
+_OPT_MODULI = click.option("--moduli", type=click.Choice(["long-term", "instantaneous"]),
+                           default="long-term", show_default=True,
+                           help="How Table 3 moduli are read.")
+_OPT_HOLD = click.option("--hold", "hold_s", type=Number(0, 600, unit="s"), default=10.0,
+                         show_default=True, help="Hold after the ramp, 0-600 s.")
+_OPT_SPEED = click.option("--speed", "speed_mm_s", type=Number(0, 100, lo_open=True, unit="mm/s"),
+                          default=0.5, show_default=True, help="Plate speed, (0, 100] mm/s.")
+_OPT_FORCE = click.option("--max-force", "max_force_N",
+                          type=Number(0, 50, lo_open=True, unit="N"), default=2.0,
+                          show_default=True, help="Force that ends the ramp, (0, 50] N.")
+_OPT_DEPTH = click.option("--max-depth", "max_depth_mm",
+                          type=Number(0, 7, lo_open=True, unit="mm"), default=6.0,
+                          show_default=True,
+                          help="Plate travel that ends the ramp if the force is not reached "
+                               "first, (0, 7] mm (the phalanx is 9 mm high).")
+_OPT_GEOMETRY = click.option("--geometry", multiple=True, metavar="KEY=VALUE",
+                             help="Override a geometry field, e.g. pocket_roof_mm=1.5 (repeatable).")
+_OPT_MATERIALS = click.option("--materials", "materials_path",
+                              help="JSON file with material constants replacing Table 3, "
+                                   "e.g. {\"sil\": {\"mu_MPa\": [0.08, 0.01]}}.")
+OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None,
+                            help="Cores to use [default: the CPUs this process may run on, at "
+                                 "most 4]. One FE run: element threads; a sweep or calibration: "
+                                 "designs or skins at once. BLAS stays single-threaded.")
+
+FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
+              _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
+EXPORT_OPTIONS = (_OPT_MESH, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
+                  _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
+
+
+def with_options(options):
+    def apply(f):
+        for opt in reversed(options):
+            f = opt(f)
+        return f
+
+    return apply
+
+
+def parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            bad(f"--geometry {item!r}: expected KEY=VALUE, e.g. pocket_roof_mm=1.5")
+        try:
+            number = float(value)
+        except ValueError:
+            bad(f"--geometry {item!r}: {value!r} is not a number")
+        if not math.isfinite(number):
+            bad(f"--geometry {item!r}: {value!r} is not a finite number")
+        out[key.strip()] = number
+    return out
+
+
+def load_materials(path: str | None) -> dict[str, dict]:
+    if path is None:
+        return {}
+    if not str(path).strip():
+        bad("--materials '': expected a JSON file path, got an empty string")
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        bad(f"--materials {path!r}: cannot be read ({exc.__class__.__name__}: {exc})")
+    except json.JSONDecodeError as exc:
+        bad(f"--materials {path!r}: not JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})")
+    if not isinstance(data, dict):
+        bad(f"--materials {path!r}: expected an object keyed by material name (sil, pu), "
+             f"got {type(data).__name__}")
+    return data
+
+
+def designs_of(names) -> list[str]:
+    from softhand.fem.geometry import parse_design
+
+    out = []
+    for name in names:
+        try:
+            out.append(parse_design(name).name)
+        except ValueError as exc:
+            bad(str(exc))
+    return out
+
+
+def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **kw):
+    """IndentationSettings from the FE options, every error naming its flag."""
+    from dataclasses import replace
+
+    from softhand.fem.geometry import parse_design
+    from softhand.fem.solver import IndentationSettings
+
+    try:
+        settings = IndentationSettings(mode=mode, **kw)
+    except ValueError as exc:  # the option types already checked each number
+        bad(str(exc))
+    materials = load_materials(materials_path)
+    try:
+        settings = replace(settings, materials=materials)
+    except ValueError as exc:
+        bad(f"--materials {materials_path!r}: {exc}")
+    geom = parse_geometry(geometry)
+    items = " ".join(geometry)
+    try:
+        settings = replace(settings, geometry=geom)
+        for name in designs:
+            parse_design(name).geometry(**geom)
+    except ValueError as exc:
+        bad(f"--geometry {items}: {exc}")
+    return settings
+
+
+def shipped_settings_differ(out: Path, settings) -> list[str]:
+    """Settings of ``settings`` that differ from those the folder's summary.json records."""
+    from dataclasses import asdict
+
+    path = out / "summary.json"
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))["provenance"]["settings"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return []
+    new = json.loads(json.dumps(asdict(settings)))
+    return sorted(k for k in new if k != "threads" and k in old and old[k] != new[k])
+
+
+def parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items:
+        region, sep, design = item.partition("=")
+        if not sep or not region.strip() or not design.strip():
+            bad(f"--skin {item!r}: expected REGION=DESIGN (e.g. Palm1=pocket2-sil)")
+        out[region.strip()] = design.strip()
+    return out
