@@ -359,11 +359,17 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
              for k in ("skin_law", "tissue_law_only", "bone_on_bone", "no_law")}
     click.echo(f"force between the hands {acc['total_Ns']:.1f} N s: through a calibrated skin law "
                f"inside its range {acc['calibrated_share_pct']:.1f} %; skin law "
-               f"{share['skin_law']:.1f} %, tissue law only (bare shell) "
+               f"{share['skin_law']:.1f} %, tissue law only (rigid regions) "
                f"{share['tissue_law_only']:.1f} %, bone on bone {share['bone_on_bone']:.1f} % "
                f"(peak {acc['bone_on_bone_peak_N']:.1f} N), no law {share['no_law']:.1f} %; "
                f"contacts beyond their law's calibrated range {acc['out_of_range_time_pct']:.1f} % "
-               "of contact time")
+               f"of contact time; unsensed skin {acc['unsensed_share_pct']:.1f} % of the skin's "
+               "force")
+    kin = summary["kinematics"]
+    flex = ", ".join(f"{d} {v:.0f}" for d, v in kin["prosthetic_flexion_deg"].items())
+    click.echo(f"prosthetic flexion reached (deg): {flex}; thumb rotation "
+               f"{kin['prosthetic_thumb_rotation_deg']:.0f}; regions touched: "
+               f"{', '.join(kin['touched']) or '-'}")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
 

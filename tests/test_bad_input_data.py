@@ -298,7 +298,7 @@ PAD = ("representations", "soft-contact+relaxation", "params")
     (("law", "name"), 3, "law.name = 3: expected a string"),
     (("law",), KeyError, "law: missing (required: format_version, design, law, representations)"),
     (("design",), "pocket1-sil", "design = 'pocket1-sil': expected 'pocket2-sil' (the file's skin)"),
-    (("format_version",), "1", "format_version '1' is not 1"),
+    (("format_version",), "1", "format_version '1' is not 2"),
     (("provenance",), [], "provenance = []: expected an object"),
 ])
 def test_bad_calibration_file_names_the_file_skin_and_key(tmp_path, path, value, needle):

@@ -129,7 +129,7 @@ def test_calibrate_json_reports_the_contract_metrics_and_writes_files(tmp_path):
         assert key in soft
     assert soft["rms_error_pct_of_2N"] < 1.0 and soft["mass_sensitivity_pct"] < 2.0
     saved = json.loads((tmp_path / "prosthetic-102l.json").read_text())
-    assert saved["provenance"]["mujoco_version"] and saved["format_version"] == 1
+    assert saved["provenance"]["mujoco_version"] and saved["format_version"] == 2
     assert json.loads((tmp_path / "index.json").read_text())["lifelike"]
 
 

@@ -13,12 +13,12 @@ import pytest
 
 from softhand.laws import Curve, ElasticLaw, Prony, SkinLaw, fit_skin_law, load_curve, qlv_force
 from softhand.laws.elastic import knot_vector
-from softhand.laws.fit import FitStatus
+from softhand.laws.fit import FitStatus, split_errors
 from softhand.skin.calibrate import CALIBRATION_MASS_KG, SkinCalibration, _ramp, calibrate_design
 from softhand.skin.files import load_calibration, save_calibration
 from softhand.skin.finger import POSTURES_DEG, press_finger
 from softhand.skin.pad import PadParams, evaluate_pieces, spline_pieces
-from softhand.skin.rig import RigSettings, SkinRangeWarning, build_rig, run_rig
+from softhand.skin.rig import BONE_DEPTH_M, RigSettings, SkinRangeWarning, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
 FE = Path(__file__).resolve().parents[1] / "calibration" / "fe"
@@ -66,12 +66,42 @@ def test_soft_contact_fit_recovers_known_parameters():
 
 
 @pytest.mark.slow
-def test_soft_contact_fits_every_fe_loading_curve_within_1_5_percent():
-    worst = 0.0
+def test_soft_contact_fits_every_fe_loading_curve_to_20_newtons_within_5_percent():
+    """One solref/solimp per skin over the whole 0-20 N ramp: the impedance sigmoid cannot follow
+    a pocket's soft start and closing knee exactly (README: up to 4.5 % of 2 N below 2 N)."""
+    worst_low = worst_high = 0.0
     for path in sorted(FE.glob("*.csv")):
         _, d, f = _ramp(load_curve(path))
-        worst = max(worst, fit_soft_contact(d, f)[1] / 2.0 * 100)
-    assert worst < 1.5  # measured worst 1.06 % of 2 N (pocket1-pu)
+        params = fit_soft_contact(d, f)[0]
+        err = split_errors(params.force(d[1:]), f[1:])
+        worst_low = max(worst_low, err["rms_pct_of_2N_to_2N"])
+        worst_high = max(worst_high, err["rms_pct_above_2N"])
+    assert worst_low < 5.0  # measured 4.5 % of 2 N (pocket1-pu-sil)
+    assert worst_high < 5.0  # measured 4.1 % of the force (pocket1-pu-sil)
+
+
+def test_pair_law_is_skin_and_tissue_in_series_over_the_whole_range():
+    """The shipped pair law of pocket2-sil against human tissue follows the two laws in series to
+    20 N (no refit truncated at 2.5 N, which was 7-9 % soft beyond it): up to 2 N within 3 % of
+    2 N, above within 1.5 % of the force; calibrated to 7 N (the tissue's data), fitted to 20 N."""
+    from softhand.skin.pair import loading_inverse, series_curve
+
+    cal = load_calibration("pocket2-sil")
+    human = load_calibration("human-middle-phalanx")
+    pair = cal.pair_law
+    assert pair.against == "human-middle-phalanx"
+    assert pair.calibrated_max_N == pytest.approx(7.0) and pair.fitted_max_N >= 20.0 - 1e-9
+    d, f = series_curve(cal.law, human.law, pair.fitted_max_N)
+    for force in (0.5, 2.0, 7.0, 15.0):  # the composition itself: depths add at equal force
+        i = int(np.argmin(abs(f - force)))
+        expect = (loading_inverse(cal.law, f[i:i + 1], top_N=pair.fitted_max_N)[0]
+                  + human.law.elastic.displacement_at(f[i]))
+        assert d[i] == pytest.approx(expect, rel=1e-9)
+    err = split_errors(pair.params.force(d[1:]), f[1:])
+    assert err["rms_pct_of_2N_to_2N"] < 3.0  # measured 2.5 %
+    assert err["rms_pct_above_2N"] < 1.5  # measured 0.8 %
+    at10 = int(np.argmin(abs(f - 10.0)))
+    assert pair.params.force(d[at10]) == pytest.approx(f[at10], rel=0.02)
 
 
 def test_soft_contact_in_the_rig_is_mass_independent(pocket_pu, pocket_soft):
@@ -81,8 +111,9 @@ def test_soft_contact_in_the_rig_is_mass_independent(pocket_pu, pocket_soft):
         st = RigSettings(mass_kg=CALIBRATION_MASS_KG * factor)
         out = run_rig(build_rig("soft-contact", soft=pocket_soft, settings=st), t, d, settings=st)
         curves[factor] = out
-        err = out.force_N - np.interp(out.displacement_mm, d, f)
-        assert 100 * np.sqrt(np.mean(err**2)) / 2 < 1.5  # within 1.5 % of 2 N of the FE
+        err = split_errors(out.force_N[1:], np.interp(out.displacement_mm[1:], d, f))
+        assert err["rms_pct_of_2N_to_2N"] < 5.0  # of the FE, 0-2 N (the 0-20 N fit's accuracy)
+        assert err["rms_pct_above_2N"] < 5.0
     ref = curves[1.0]
     for factor in (0.01, 100.0):
         other = np.interp(ref.displacement_mm, curves[factor].displacement_mm,
@@ -144,9 +175,12 @@ def test_calibrate_design_meets_the_issue_targets_on_a_pocket_design(pocket_pu):
                            representations=("soft-contact", "soft-contact+relaxation"))
     soft = cal.representations["soft-contact"]
     relax = cal.representations["soft-contact+relaxation"]
-    assert soft.rms_error_pct_of_2N < 3.0 and relax.rms_error_pct_of_2N < 3.0
+    # soft contact over the 0-20 N ramp; the pad over the social-touch record (ramp to 2 N)
+    assert soft.extra["rms_pct_of_2N_to_2N"] < 5.0 and soft.extra["rms_pct_above_2N"] < 5.0
+    assert relax.rms_error_pct_of_2N < 3.0
     assert relax.relaxation_error_pct < 5.0
     assert soft.mass_sensitivity_pct < 2.0 and relax.mass_sensitivity_pct < 2.0
+    assert cal.pair_law is not None and cal.pair_law.calibrated_max_N == pytest.approx(7.0)
     assert cal.provenance["fe_curves"]["pocket2-pu@0.5mm/s"] == pocket_pu.sha256
 
 
@@ -169,7 +203,7 @@ def test_impact_and_overload_stay_bounded(pocket_pu, pocket_soft, rep, timestep)
         mujoco.mj_step(model, data)
         depth.append(-1e3 * data.qpos[0])
     assert np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))
-    assert max(depth) < 8.0  # the bone stop 4.5 mm under the skin holds it
+    assert max(depth) < 1e3 * BONE_DEPTH_M + 3.0  # the bone stop under the skin holds it
     data = mujoco.MjData(model)
     for k in range(int(2.0 / timestep)):  # 20 N dead weight
         data.qfrc_applied[0] = -20.0 * min(1.0, k * timestep)

@@ -114,9 +114,9 @@ def test_body_transforms_match_mujoco(model, recorded, summary):
 def test_skin_geometry_labels_and_colours(model, summary):
     info = regions(model, "pro_")["Index1"]
     entry = summary["entities"][f"world/bodies/{info.body}/{info.geom}"]
-    assert "Ellipsoids3D:half_sizes" in entry["static"]
-    assert "Ellipsoids3D:labels" in entry["static"]
-    assert "Ellipsoids3D:colors" in entry["temporal"]
+    assert "Capsules3D:radii" in entry["static"]
+    assert "Capsules3D:labels" in entry["static"]
+    assert "Capsules3D:colors" in entry["temporal"]
     assert entry["sim_time_points"] == N_FRAMES
     bones = [e for e in summary["entities"] if e.startswith("world/bodies/hum_") and "bone" in e]
     assert bones and all("Capsules3D:lengths" in summary["entities"][e]["static"] for e in bones)

@@ -2,15 +2,15 @@
 
 Measures, in one process on this machine (``softhand bench handshake``):
 
-* speed of the default handshake (pocket2-sil everywhere, neutral controller, 2 ms step, all 18
-  touch sensors and the partner's 19): steps per second and real-time factor of ``env.step`` with
+* speed of the default handshake (pocket2-sil everywhere, neutral controller, 2 ms step, the 18
+  region contact sensors and the partner's 17): steps per second and real-time factor of ``env.step`` with
   the rerun recording off, and with it on (the recording's write time added), best of REPEATS runs;
   the same for timesteps 1 and 0.5 ms;
 * error of each timestep: per controller and seed, the region forces at 2 ms and 1 ms against
   0.5 ms (largest difference of a region's mean and peak force, relative change of the summed
   mean forces, whether the regions over 2 N are the same);
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
-  wearing rigid shells, the commercial skin (prosthetic-102l) and the paper's designs: per skin and
+  wearing rigid skins (stock contact, only the tissue indents), the commercial skin (prosthetic-102l) and the paper's designs: per skin and
   region the peak force and the peak contact area, the regions over 2 N and their overlap with the
   paper's Fig. 4 set.
 
@@ -138,7 +138,7 @@ def _markdown(d: dict[str, Any]) -> str:
         "# Handshake benchmark (`softhand bench handshake`)", "",
         f"{machine_line(m)} One process, one core for the simulation.", "",
         f"Speed of one {next(iter(d['speed'].values()))['recording_off']['sim_s']:.2f} s handshake "
-        "(seed 0, pocket2-sil, neutral controller, 37 touch sensors, actions at 100 Hz), best of "
+        "(seed 0, pocket2-sil, neutral controller, 35 contact sensors, actions at 100 Hz), best of "
         f"{REPEATS}; recording on adds the time to write the rerun file:", "",
         "| timestep | recording | steps/s | real-time factor |", "|---|---|---|---|",
     ]
@@ -148,7 +148,7 @@ def _markdown(d: dict[str, Any]) -> str:
             lines.append(f"| {ts} | {label} | {r['steps_per_s']:.0f} | {r['realtime_factor']:.1f}x |")
     ref = list(d["speed"])[-1]
     lines += ["", f"Error of each timestep against {ref} (same controller and seed; worst of seeds "
-              f"{', '.join(map(str, ERROR_SEEDS))}; region forces from the touch sensors):", "",
+              f"{', '.join(map(str, ERROR_SEEDS))}; region forces from the region sensors):", "",
               "| controller | timestep | max diff of a region's mean N | max diff of a region's "
               "peak N | summed mean forces | same regions > 2 N |", "|---|---|---|---|---|---|"]
     for controller, rows in d["timestep_error"].items():

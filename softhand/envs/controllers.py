@@ -3,11 +3,12 @@
 Both map an observation and the env's ``info`` to an action in ``[-1, 1]^6`` (finger motors,
 thumb flexion, thumb rotation; positive closes):
 
-* :class:`OpenLoopClose`: rotate the thumb into opposition, close every digit at a fixed speed
-  while the partner grips and shakes, open when it lets go (what a myoelectric user does with one
-  "close" signal).
-* :class:`ForceRegulating`: per digit, close until the mean force of that digit's regions reaches a
-  target grip force, open a little when over it (a proportional force loop on the region forces).
+* :class:`OpenLoopClose`: rotate the thumb to its handshake posture, close every digit at a fixed
+  speed for a fixed time once the partner grips, hold, open when it lets go (what a myoelectric
+  user does with one short "close" signal).
+* :class:`ForceRegulating`: per digit, close until the force of that digit's most loaded region
+  reaches a target grip force, open a little when over it (a proportional force loop on the region
+  forces); the thumb rotates to its handshake posture.
 * :class:`Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
   waiting for the partner"): per digit, close until the digit first touches the partner, then hold
   that posture (the motors are not back-drivable) until the partner lets go; the thumb is not
@@ -21,28 +22,49 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from softhand.hands.constants import PARTNER
+
 __all__ = ["CONTROLLERS", "ForceRegulating", "Neutral", "OpenLoopClose", "make_controller"]
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 _GRIPPING = ("grip", "shake")
+#: Thumb rotation (palmar abduction) a controller holds while shaking hands (rad): the thumb lies
+#: over the back of the partner's hand instead of pointing into it (the same assumption as the
+#: partner's, softhand.hands.constants.PARTNER["handshake_thumb_abduction_deg"]).
+HANDSHAKE_THUMB_RAD = float(np.radians(PARTNER["handshake_thumb_abduction_deg"]))
+
+
+def _thumb_to_handshake(info: dict) -> float:
+    """Thumb-rotation speed command (in [-1, 1]) towards HANDSHAKE_THUMB_RAD."""
+    return float(np.clip(4.0 * (HANDSHAKE_THUMB_RAD - info["thumb_rotation_rad"]), -1.0, 1.0))
 
 
 @dataclass
 class OpenLoopClose:
-    """Close at ``speed`` (fraction of the maximum) during the grip, open afterwards."""
+    """Close at ``speed`` (fraction of the maximum) for ``close_s`` from the start of the grip,
+    hold (the motors are not back-drivable), open afterwards; the thumb goes to its handshake
+    rotation. Open loop: the closure does not depend on the forces (the default closes each
+    digit by 0.6 x 0.35 s / 1 s = 21 % of its range beyond where it started)."""
 
     speed: float = 0.6
+    close_s: float = 0.35
 
     def __post_init__(self) -> None:
         if not 0 < self.speed <= 1:
             raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
+        if not self.close_s > 0:
+            raise ValueError(f"close_s = {self.close_s!r} must be > 0 s")
+        self._start: float | None = None
 
     def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
         a = np.zeros(6)
         if info["phase"] in _GRIPPING:
-            a[:5] = self.speed
-            a[5] = 1.0
+            if self._start is None:
+                self._start = info["time_s"]
+            a[:5] = self.speed if info["time_s"] - self._start < self.close_s else 0.0
+            a[5] = _thumb_to_handshake(info)
         elif info["phase"] in ("release", "return", "done"):
+            self._start = None
             a[:] = -1.0
         return a
 
@@ -69,7 +91,9 @@ class ForceRegulating:
         for i, digit in enumerate(_DIGITS):
             f = max(v for k, v in forces.items() if k.startswith(digit))
             a[i] = np.clip(self.gain_per_N * (self.target_N - f), -1.0, 1.0)
-        a[5] = 1.0
+        # the thumb swings to its handshake rotation only while it holds less than the target
+        thumb = max(v for k, v in forces.items() if k.startswith("Thumb"))
+        a[5] = _thumb_to_handshake(info) if thumb < self.target_N else 0.0
         return a
 
 

@@ -5,6 +5,7 @@ The docstring of :class:`HandshakeEnv` is the specification.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
@@ -16,7 +17,13 @@ from gymnasium import spaces
 
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
-from softhand.envs.skins import parse_skins, series_law
+from softhand.envs.skins import (
+    CalibratedRangeWarning,
+    calibrated_max_force,
+    parse_skins,
+    series_law,
+    skin_of_pair,
+)
 from softhand.hands import (
     SceneConfig,
     partner_actuators,
@@ -26,6 +33,8 @@ from softhand.hands import (
     regions,
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
+from softhand.hands.constants import PARTNER
+from softhand.hands.skeleton import SENSOR_SLOTS
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
@@ -50,10 +59,13 @@ class HandshakeEnv(gym.Env):
     (:mod:`softhand.envs.partner`, published timings). Its hand rides a compliant arm (a soft weld
     to the scripted target) and meets the prosthetic hand palm to palm, web space to web space,
     the hands crossed at 60 deg so that each hand's fingers wrap around the other's ulnar border
-    (:mod:`softhand.hands.scene`). Contact forces come from calibrated soft contacts (skin in series
-    with human tissue; the bare shell of the thenar and the palm borders against tissue with the
-    tissue alone), read by one touch sensor per region. The partner regulates the force it feels
-    on its own hand (19 touch sensors); its grip acts once per action step, its arm every step.
+    (:mod:`softhand.hands.scene`). The prosthetic hand's whole envelope is skin (the 18 regions and
+    the non-sensing thenar; :mod:`softhand.hands.envelope`), the partner's is one layer of tissue;
+    every contact between them is a calibrated soft contact (the skin in series with human tissue,
+    fitted to 20 N, calibrated to 7 N: a contact above that raises a ``CalibratedRangeWarning``
+    once per pair and episode). Each region's reading is a contact sensor on its skin's contacts
+    inside its sensor zone (the contact side; the rest is unsensed skin). The partner regulates
+    the force its digits feel; its grip acts once per action step, its arm every step.
 
     Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
     (positive closes; the maximum closes a digit from open in about 1 s):
@@ -172,11 +184,15 @@ class HandshakeEnv(gym.Env):
         self.region_names = tuple(self.skins)
         infos = regions(m, "pro_")
         self.region_geoms = tuple(infos[r].geom for r in self.region_names)
-        self._sensor_adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id]
-                                     for r in self.region_names])
+        # region readings: the normal forces in each region sensor's SENSOR_SLOTS slots of
+        # (found, force xyz in the contact frame); slot 0's ``found`` counts every match
+        adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id] for r in self.region_names])
+        self._sensor_idx = adr[:, None] + 4 * np.arange(SENSOR_SLOTS)[None, :] + 1
+        self._found_idx = adr
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
         self._pro_dof = m.jnt_dofadr[self._pro_joints]
+        self._thumb_rot_qpos = int(m.jnt_qposadr[m.joint("pro_thumb_rot").id])
         self._pro_act = np.array([m.actuator(a).id for a in prosthetic_actuators()])
         self._max_speed = m.actuator_ctrlrange[self._pro_act, 1].copy()
         hum = [m.actuator(a).id for a in partner_actuators()]
@@ -187,9 +203,26 @@ class HandshakeEnv(gym.Env):
         self._mocap_row = self.data.mocap_pos[self._mocap]
         self._ctrl, self._sensordata = self.data.ctrl, self.data.sensordata
         self._qpos, self._qvel = self.data.qpos, self.data.qvel
-        self._opp_max = float(m.actuator_ctrlrange[self._opp_act, 1])
-        self._feel_adr = np.array([m.sensor_adr[i] for i in range(m.nsensor)
-                                   if m.sensor(i).name.startswith("hum_feel_")])
+        self._opp_max = min(float(m.actuator_ctrlrange[self._opp_act, 1]),
+                            np.radians(PARTNER["handshake_thumb_abduction_deg"]))
+        # the grip force the partner regulates is what its digits feel (data gloves measure the
+        # fingers' and thumb's phalanges), not what its palm or thenar feel: a hard push on the
+        # palm must not make the partner open its fingers
+        feel = np.array([m.sensor_adr[i] for i in range(m.nsensor)
+                         if m.sensor(i).name.startswith("hum_feel_")
+                         and m.sensor(i).name.rsplit("_", 1)[-1] in ("proximal", "middle",
+                                                                     "distal")])
+        self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
+        # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
+        self._range = np.full((m.ngeom, m.ngeom), np.inf)
+        self._pair_name = {}
+        for pid in range(m.npair):
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
+            g1, g2 = int(m.pair_geom1[pid]), int(m.pair_geom2[pid])
+            top = calibrated_max_force(skin_of_pair(name, self.skins)[1], self.calibration_dir)
+            self._range[g1, g2] = self._range[g2, g1] = top
+            self._pair_name[(min(g1, g2), max(g1, g2))] = name
+        self._warned: set[str] = set()
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
@@ -215,7 +248,9 @@ class HandshakeEnv(gym.Env):
         phase = float(rng.uniform(0, 2 * np.pi)) if self.randomize else 0.0
         start, quat = partner_start_pose(self.config)
         contact, _ = partner_contact_pose(self.config)
-        lo = m.actuator_ctrlrange[self._grip_act, 0]
+        # open: every joint of the digit at its neutral extension (summed flexion 0), not at the
+        # servo's lower limit, which would hyperextend the reaching hand to its joint limits
+        lo = np.maximum(m.actuator_ctrlrange[self._grip_act, 0], 0.0)
         hi = m.actuator_ctrlrange[self._grip_act, 1]
         self._script = PartnerScript(self._timeline.scaled(factor), start, contact,
                                      grip_force_N=grip, shake_phase=phase, flex_range=(lo, hi))
@@ -227,6 +262,9 @@ class HandshakeEnv(gym.Env):
         d.mocap_quat[self._mocap] = quat
         mujoco.mj_forward(m, d)
         self._forces = np.zeros(len(self.region_names))
+        self._saturated = 0
+        self._beyond = 0
+        self._warned = set()
         self._ended = None
         return self._obs(), self._info({}, "reach")
 
@@ -255,10 +293,12 @@ class HandshakeEnv(gym.Env):
         ctrl[self._pro_act] = a * self._max_speed
         # the partner's grip acts once per action step (100 Hz by default), the arm every step
         t = d.time
-        feel = self._sensordata[self._feel_adr]
+        feel = np.linalg.norm(self._sensordata[self._feel_idx], axis=1)
         touched = feel[feel > CONTACT_N]
         mean = float(touched.mean()) if touched.size else 0.0
         ctrl[self._grip_act] = script.grip(t, mean, opt.timestep * self.frame_skip)
+        # the thumb abducts to its handshake posture once the hands meet (abducted during the
+        # reach too, it pressed the prosthetic's back with 16 N in the neutral handshake)
         ctrl[self._opp_act] = self._opp_max * (script.timeline.phase(t) in _GRIPPING)
         mount, k, last = self._mount, self._step_index, len(self._mount) - 1
         end = k + self.frame_skip
@@ -277,7 +317,9 @@ class HandshakeEnv(gym.Env):
         finally:
             opt.disableflags = flags
         self._step_index = end
-        self._forces = self._sensordata[self._sensor_adr]  # fancy indexing: a copy
+        self._forces = self._sensordata[self._sensor_idx].sum(axis=1)
+        self._saturated = int((self._sensordata[self._found_idx] > SENSOR_SLOTS).sum())
+        self._check_range()
         phase = script.timeline.phase(d.time)
         # a sum is finite only if every entry is (an overflow to inf is unstable anyway)
         unstable = not np.isfinite(self._qpos.sum() + self._qvel.sum())
@@ -293,6 +335,29 @@ class HandshakeEnv(gym.Env):
         return obs, reward, unstable, truncated, info
 
     # --- helpers -----------------------------------------------------------------------------
+    def _check_range(self) -> None:
+        """Count the contacts above their pair law's calibrated range; warn once per pair."""
+        d = self.data
+        self._beyond = 0
+        if d.ncon == 0:
+            return
+        con = d.contact
+        adr = con.efc_address
+        live = adr >= 0
+        geoms = con.geom[live]
+        force = d.efc_force[adr[live]]  # elliptic cones: a contact's first row is its normal
+        top = self._range[geoms[:, 0], geoms[:, 1]]
+        over = force > top
+        self._beyond = int(over.sum())
+        for (g1, g2), f, lim in zip(geoms[over], force[over], top[over], strict=True):
+            name = self._pair_name[(min(g1, g2), max(g1, g2))]
+            if name not in self._warned:
+                self._warned.add(name)
+                warnings.warn(f"pair {name}: {f:.2f} N is beyond the {lim:g} N its law "
+                              f"({skin_of_pair(name, self.skins)[1]} in series with human tissue) "
+                              "is calibrated to; the force above that is an extrapolation",
+                              CalibratedRangeWarning, stacklevel=3)
+
     def _obs(self) -> np.ndarray:
         total = self._script.timeline.total_s if self._script else self._timeline.total_s
         n = self._pro_qpos.size
@@ -320,4 +385,7 @@ class HandshakeEnv(gym.Env):
     def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:
         return {"region_forces_N": dict(zip(self.region_names, self._forces.tolist(), strict=True)),
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
-                "partner_grip_N": self._script.grip_force_N if self._script else None}
+                "partner_grip_N": self._script.grip_force_N if self._script else None,
+                "saturated_sensors": self._saturated,
+                "thumb_rotation_rad": float(self._qpos[self._thumb_rot_qpos]),
+                "contacts_beyond_range": self._beyond}

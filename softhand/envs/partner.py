@@ -13,9 +13,10 @@ release    fingers open, 0.35 s (the rest of the 1.96 s contact)
 return     mount goes back to its start pose, 0.75 s
 ========== ============================================================================
 
-Grip: the partner regulates the mean normal force it feels over the segments of its own hand
-that touch the prosthesis (touch sensors ``hum_feel_*`` on every tissue: skin, bare shell and
-bone contacts alike, as the data-glove sensors on the subjects' hands did) to 2.5 N (the average
+Grip: the partner regulates the mean force its digits feel over the phalanges that touch the
+prosthesis (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors on
+the subjects' fingers did; the palm and thenar are left out, so that a push on the palm does not
+open the fingers) to 2.5 N (the average
 grip force measured with data gloves, Melnyk et al. 2014) times ``squeeze``; an integral
 controller moves the finger and thumb flexion targets. Shake amplitude: +-5 mm
 vertically (assumption: only the *relative* motion of the two hands is modelled; the arm's gross

@@ -11,7 +11,7 @@ import numpy as np
 
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
-from softhand.envs.skins import calibrated_max_force
+from softhand.envs.skins import calibrated_max_force, skin_of_pair
 from softhand.paper import paper
 
 __all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
@@ -44,15 +44,17 @@ class HandshakeRun:
     def force_accounting(self) -> dict[str, float]:
         """Where the normal force between the hands came from, over the recorded frames.
 
-        ``skin_law``: a skin x tissue pair law (calibrated skin); ``tissue_law_only``: the bare
-        prosthetic shell or a ``rigid`` region against tissue (only the tissue law);
+        ``skin_law``: a skin x tissue pair law (calibrated skin); ``tissue_law_only``: a
+        ``rigid`` region against tissue (only the tissue law);
         ``bone_on_bone``: bones pressed through skin and tissue (no law); ``no_law``: any other
         contact between the hands. ``calibrated_share_pct``: the skin-law force inside its
         calibrated range (:func:`softhand.envs.skins.calibrated_max_force`), in % of all the force
         between the hands (frames of 10 ms; contacts beyond the range count as uncalibrated).
         ``out_of_range_time_pct``: law-carrying contact-frames above their law's range, in % of
-        all law-carrying contact-frames. No region has non-sensing skin yet, so
-        ``unsensed_skin_Ns`` is 0.
+        all law-carrying contact-frames. ``unsensed_skin_Ns``: the force through the prosthetic
+        skin that no region sensor read (a phalanx's dorsal half, the palm's borders, the
+        thenar), i.e. all pair force less the 18 region readings; ``unsensed_share_pct`` its
+        share of the pair force.
         """
         n = len(ACCOUNT_CLASSES)
         acc = self.accounting if self.accounting is not None else np.zeros((1, n + 3))
@@ -68,8 +70,38 @@ class HandshakeRun:
             "bone_on_bone_peak_N": float(acc[:, 2].max()),
             "bone_on_bone_Ns": integral["bone_on_bone"],
             "out_of_range_time_pct": 100.0 * float(acc[:, n + 1].sum()) / max(1.0, acc[:, n].sum()),
-            "unsensed_skin_Ns": 0.0,
         })
+        pair = acc[:, 0] + acc[:, 1]  # every pair is a prosthetic skin geom against tissue
+        sensed = self.region_force_N.sum(axis=1) if self.region_force_N.size else np.zeros(1)
+        unsensed = float(np.maximum(pair - sensed[:pair.size], 0.0).sum() * dt)
+        out["unsensed_skin_Ns"] = unsensed
+        out["unsensed_share_pct"] = 100.0 * unsensed / max(float(pair.sum() * dt), 1e-12)
+        return out
+
+    def kinematics(self) -> dict:
+        """What the hands did: the largest flexion of each prosthetic digit's driven joint and
+        of the thumb rotation (deg) while gripping, the regions that touched (> 0.05 N), and the
+        partner's largest excursion past a joint's human range (deg; MuJoCo's limits are soft)."""
+        m = self.model
+        grip = np.array([p in ("grip", "shake") for p in self.phase])
+        q = self.qpos[grip] if grip.any() else self.qpos
+        out: dict = {"prosthetic_flexion_deg": {}, "touched": [
+            r for r, v in self.table().items() if v["peak_N"] > 0.05]}
+        for digit in ("index", "middle", "ring", "little", "thumb"):
+            joint = m.joint(f"pro_{digit}_mcp")
+            out["prosthetic_flexion_deg"][digit] = float(np.degrees(q[:, joint.qposadr[0]].max()))
+        rot = m.joint("pro_thumb_rot")
+        out["prosthetic_thumb_rotation_deg"] = float(np.degrees(q[:, rot.qposadr[0]].max()))
+        worst = (0.0, "")
+        for j in range(m.njnt):
+            name = m.joint(j).name
+            if not name.startswith("hum_") or m.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE:
+                continue
+            lo, hi = m.jnt_range[j]
+            a = self.qpos[:, m.jnt_qposadr[j]]
+            beyond = float(np.degrees(max((a - hi).max(), (lo - a).max(), 0.0)))
+            worst = max(worst, (beyond, name))
+        out["partner_beyond_range_deg"] = {"max": worst[0], "joint": worst[1]}
         return out
 
     def table(self) -> dict[str, dict[str, float]]:
@@ -97,6 +129,7 @@ class HandshakeRun:
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
                 "rigid_contact_peak_N": float(rigid.max()),
                 "force_accounting": self.force_accounting(),
+                "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
 
 
@@ -198,16 +231,15 @@ class ContactAreas:
 def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float]]:
     """(geom, geom) of every contact pair -> (class index in ACCOUNT_CLASSES, calibrated range N).
 
-    Pairs ``{Region}__{tissue}`` carry the region's skin in series with tissue (``skin_law``;
-    a ``rigid`` region: ``tissue_law_only``); ``shell_{bone}__{tissue}`` the tissue law alone.
+    Pairs ``{Skin}__{tissue}`` carry the skin's design in series with tissue (``skin_law``); a
+    ``rigid`` region's pairs: ``tissue_law_only``.
     """
     m = env.model
     out = {}
     for pid in range(m.npair):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
-        region = name.partition("__")[0]
-        skin = env.skins.get(region, "rigid")
-        kind = 0 if region in env.skins and skin != "rigid" else 1
+        _, skin = skin_of_pair(name, env.skins)
+        kind = 0 if skin != "rigid" else 1
         g1, g2 = int(m.pair_geom1[pid]), int(m.pair_geom2[pid])
         out[(min(g1, g2), max(g1, g2))] = (kind, calibrated_max_force(skin, env.calibration_dir))
     return out

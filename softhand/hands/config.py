@@ -179,15 +179,16 @@ class SceneConfig:
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
         prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
         crossing_angle_deg: angle between the two hands' long axes in the plane of the touching
-            palms, from antiparallel (0) to crossed at right angles (90), in degrees. In a handshake
-            each hand tilts ulnarly, its fingers pointing forward and down, so that each hand's
-            fingers wrap around the other's ulnar border onto its back. Default 60 (about 30 deg of
-            tilt per hand): an assumption, no published measurement found.
+            palms, from antiparallel (0) to crossed at right angles (90), in degrees, shared equally
+            by the two hands. In a handshake each hand tilts ulnarly, its fingers pointing forward
+            and down, so that each hand's fingers wrap around the other's ulnar border onto its
+            back. Default 60 (30 deg of tilt per hand, each forearm 30 deg from horizontal): an
+            assumption, no published measurement found.
         partner_contact_offset_m: shift of the partner from the web-to-web pose in its hand
-            frame (m): default 15 mm ulnar and 7 mm off the palm, the smallest shift (searched on a
-            5 mm x 5 mm x 1 mm grid) at which no rigid part (bone or bare shell) of one hand lies
-            more than 0.5 mm inside the other's soft envelope while the soft parts still touch (the
-            two thenars would otherwise sit on each other; tests/test_hands.py checks it).
+            frame (m): default 12 mm off the palm, the smallest shift off the palm (1 mm steps) at
+            which the two hands' bones stay more than 2 mm apart at the target pose while their
+            soft layers press (the thenars meet first: the bulge of each thumb's metacarpal);
+            tests/test_hands.py checks it.
         partner_start_offset_m: partner mount start position relative to its contact pose (m, in
             the partner's hand frame: +x distal, +y radial, +z dorsal); the env moves the mocap
             from there to the contact pose (reach) and back. Default: 150 mm back along the
@@ -200,7 +201,7 @@ class SceneConfig:
     gravity_m_s2: float = 9.81
     prosthetic_wrist_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
     crossing_angle_deg: float = 60.0
-    partner_contact_offset_m: tuple[float, float, float] = (0.0, -0.015, 0.007)
+    partner_contact_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.012)
     partner_start_offset_m: tuple[float, float, float] = (-0.15, 0.0, 0.10)
 
     def __post_init__(self) -> None:

@@ -58,7 +58,9 @@ __all__ = [
     "FINGERTIP_OFFSET_REFERENCE_LENGTH_M",
     "FINGER_BREADTH_SHARE",
     "FINGER_SEGMENTS",
+    "FINGER_SPACING_FILL",
     "HAND_MASS_FRACTION",
+    "METACARPAL_BONE_RADIUS_OVER_THICKNESS",
     "PALM_THICKNESS_RATIO",
     "PARTNER",
     "PHALANX_TAPER",
@@ -125,21 +127,36 @@ FINGER_BREADTH_SHARE = MappingProxyType(
 #: Thumb phalanx breadth relative to the index proximal phalanx. assumption: the thumb is broader.
 THUMB_BREADTH_OVER_INDEX = 1.10
 #: Thenar (thumb metacarpal) envelope radius relative to the thumb proximal phalanx. assumption.
-THENAR_RADIUS_OVER_THUMB = 1.25
+#: The thenar eminence is muscle over a slender metacarpal: its bone has the proximal phalanx's
+#: radius and the rest of the envelope is soft (HandLayout.bone_radius_m).
+THENAR_RADIUS_OVER_THUMB = 1.0
+#: Largest envelope radius of a long finger's proximal phalanx as a share of half the distance
+#: between its MCP centre and the nearest neighbouring one. assumption: adducted fingers touch
+#: but their envelopes do not overlap (a 2 % gap), so each finger's skin is one layer.
+FINGER_SPACING_FILL = 0.98
 
 #: Radius of the middle / distal phalanx relative to the proximal phalanx of the same finger.
 #: assumption: fingers taper distally (ellipsoid breadths of Buchholz & Armstrong, 1991, decrease
 #: from proximal to distal; their coefficients were not available to this module).
 PHALANX_TAPER = MappingProxyType({"proximal": 1.0, "middle": 0.90, "distal": 0.82})
 
+#: Radius of a finger metacarpal's rigid bone / palm thickness. assumption: a metacarpal shaft is
+#: about 10 mm across (5 mm radius in a 30 mm palm), so the palm's soft layer over it is about
+#: 10 mm, palmar and dorsal, and the thenar (the thumb metacarpal's soft envelope) can lie beside
+#: the index metacarpal without its bone entering the palm's skin.
+METACARPAL_BONE_RADIUS_OVER_THICKNESS = 1.0 / 6.0
+
 #: Lateral position of each CMC joint as a fraction of its MCP joint's lateral position.
 #: assumption: the metacarpals converge towards the carpus, so the palm narrows at the wrist.
 CMC_Y_OVER_MCP_Y = 0.70
 
 #: Thumb CMC (trapeziometacarpal) joint in the hand frame, as fractions of
-#: (hand length, hand width, palm thickness). assumption: ~11 mm distal to the crease, 22 mm radial,
-#: 7.5 mm palmar for the 190 x 88 mm hand, i.e. at the trapezium on typical radiographs.
-THUMB_CMC_FRACTION = (0.06, 0.25, -0.25)
+#: (hand length, hand width, palm thickness). assumption: ~11 mm distal to the crease, 35 mm radial
+#: and on the palmar skin plane (15 mm palmar) for the 190 x 88 mm hand: the trapezium lies radial
+#: and palmar to the index metacarpal base, so the thumb's bones and the thenar clear the index
+#: metacarpal (21 mm between the axes at the base) and the thumb flexes across the palm palmar to the
+#: metacarpals, as a human thumb does (tests/test_hands.py checks bones over a posture grid).
+THUMB_CMC_FRACTION = (0.06, 0.40, -0.50)
 #: The relaxed, adducted thumb lies in the palm plane at an angle from the hand's long axis that is
 #: not a constant: it is derived so that the extended thumb tip lies FINGERTIP_OFFSET_M
 #: ["thumb_to_index"] proximal to the index tip (HandLayout.thumb_spread_rad, softhand.hands.layout).
@@ -253,6 +270,10 @@ PARTNER = MappingProxyType(
         # torques above it bounds a free digit's flexion speed to ~20 rad/s, the order of fast
         # voluntary finger flexion.
         "joint_damping_nm_s_per_rad": 0.05,
+        # assumption: palmar abduction of the thumb while it holds the other hand in a handshake
+        # (deg): it lies over the back of the other hand's index metacarpal, not fully opposed
+        # (the [AAOS65] range ends at 70 deg, where the thumb would point into the other palm).
+        "handshake_thumb_abduction_deg": 35.0,
         # numerical, not anatomical: armature = damping x this time, on every partner joint. A
         # distal phalanx alone has ~2e-7 kg m^2 about its joint, so under the damping above its
         # motion relaxes in ~4 us: far below a 1 ms step. MuJoCo's constraint solver (mass matrix M)

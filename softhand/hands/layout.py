@@ -45,6 +45,8 @@ class DigitLayout:
         cmc_m: position of the CMC joint (m).
         lengths_m: kinematic segment lengths (m), keyed by segment name.
         radii_m: envelope radius of each segment (m), keyed by segment name.
+        bone_radii_m: radius of each segment's rigid bone (m): the envelope less the skin, except
+            the thumb metacarpal, whose bone has the thumb proximal bone's radius under the thenar.
         masses_kg: segment masses (kg), keyed by segment name (finger metacarpals: 0, their mass is
             in the palm).
     """
@@ -55,6 +57,7 @@ class DigitLayout:
     lengths_m: dict[str, float]
     radii_m: dict[str, float]
     masses_kg: dict[str, float]
+    bone_radii_m: dict[str, float]
 
     @property
     def segments(self) -> tuple[str, ...]:
@@ -110,12 +113,13 @@ def hand_layout(config: HandConfig) -> HandLayout:
     t, skin = config.thickness_m, config.skin_thickness_m
     rho = config.density_kg_m3
     scale = L / const.FINGERTIP_OFFSET_REFERENCE_LENGTH_M
-    r_mc = 0.5 * t - skin  # finger metacarpal bone radius: palm core between the two skins
+    # finger metacarpal bone: a slender shaft in the palm's soft envelope (radius t / 2)
+    r_mc = min(const.METACARPAL_BONE_RADIUS_OVER_THICKNESS * t, 0.5 * t - skin)
 
     # Across the palm: the skin over the index and little metacarpals at +-W/2 (hand breadth is
     # measured on the skin); the MCP centres in between are spaced by the mean breadth share of
     # each pair of neighbours.
-    span = W - 2.0 * (r_mc + skin)  # distance between the index and little MCP centres
+    span = W - t  # distance between the index and little MCP centres (envelopes of radius t / 2)
     shares = const.FINGER_BREADTH_SHARE
     total = sum(shares.values())
     gaps = [
@@ -126,8 +130,12 @@ def hand_layout(config: HandConfig) -> HandLayout:
     for g in gaps:
         y.append(y[-1] - g / sum(gaps) * span)
     mcp_y = dict(zip(const.FINGERS, y, strict=True))
-    # Proximal phalanx radius: half the finger's share of the hand width.
-    r_pp = {f: 0.5 * shares[f] / total * W for f in const.FINGERS}
+    # Proximal phalanx radius: half the finger's share of the hand width, but no wider than the
+    # spacing of the MCP centres allows (adducted fingers' envelopes must not overlap).
+    spacing = {f: min(abs(mcp_y[f] - mcp_y[g]) for g in const.FINGERS if g != f)
+               for f in const.FINGERS}
+    r_pp = {f: min(0.5 * shares[f] / total * W, 0.5 * const.FINGER_SPACING_FILL * spacing[f])
+            for f in const.FINGERS}
 
     digits: dict[str, DigitLayout] = {}
     for f in const.FINGERS:
@@ -136,7 +144,7 @@ def hand_layout(config: HandConfig) -> HandLayout:
         mcp_x = tip_x - (pp + mp + dp)
         lengths = {"metacarpal": mc, "proximal": pp, "middle": mp, "distal": dp}
         radii = {
-            "metacarpal": r_mc + skin,
+            "metacarpal": 0.5 * t,
             **{s: r_pp[f] * const.PHALANX_TAPER[s] for s in ("proximal", "middle", "distal")},
         }
         masses = {
@@ -152,6 +160,8 @@ def hand_layout(config: HandConfig) -> HandLayout:
             lengths_m=lengths,
             radii_m=radii,
             masses_kg=masses,
+            bone_radii_m={"metacarpal": r_mc, **{s: radii[s] - skin for s in
+                                                   ("proximal", "middle", "distal")}},
         )
 
     # Thumb.
@@ -182,12 +192,15 @@ def hand_layout(config: HandConfig) -> HandLayout:
                 "proximal": rho * _capsule_volume(radii["proximal"], pp, closed_end=False),
                 "distal": rho * _capsule_volume(radii["distal"], dp, closed_end=True),
             },
+            bone_radii_m={"metacarpal": r_th - skin, "proximal": r_th - skin,
+                          "distal": radii["distal"] - skin},
         ),
         **digits,
     }
 
     # Every bone must keep a positive radius under the skin.
-    thinnest = min((d.radii_m[s], f"{d.name}_{s}") for d in digits.values() for s in d.phalanges)
+    thinnest = min((d.bone_radii_m[s] + skin, f"{d.name}_{s}") for d in digits.values()
+                   for s in d.phalanges)
     if thinnest[0] - skin < _MIN_BONE_RADIUS_M:
         raise ValueError(
             f"skin_thickness_m = {skin!r} m leaves a bone radius of {thinnest[0] - skin:.4f} m in "

@@ -22,13 +22,15 @@ around it (an enveloping grip). The finger servos are capped at the maximal grip
 fingers acting at the proximal phalanx ([Mathiowetz85]); the grip force in a handshake comes from how
 far the scripted target lies beyond contact (kp x overshoot).
 
-Contact geoms: ``tissue_{segment}`` (contype = conaffinity = 0: contacts only through explicit
-``<pair>`` elements): capsules around the thumb metacarpal (thenar) and every phalanx, two
-ellipsoids on the palm body: ``tissue_palm`` (palmar) and ``tissue_back`` (dorsal), and capsules
-around the index and little metacarpals (the palm's radial and ulnar borders).
-List them with partner_tissue_geoms(). Each has a touch sensor ``feel_{segment}`` on a site
-enclosing it: the force the partner feels there, whatever touches it (skin, shell or bone).
-Rigid bones (``bone_*``) collide with the prosthetic bones.
+Contact geoms: ``tissue_{piece}`` (contype = conaffinity = 0: contacts only through explicit
+``<pair>`` elements): the hand's soft envelope as one layer of convex pieces
+(:mod:`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
+on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull cut at its
+mid-plane into ``tissue_palm`` (palmar, borders included) and ``tissue_back`` (dorsal). No point lies
+inside two tissue geoms at rest, so no indentation is resisted by two laws at once.
+List them with partner_tissue_geoms(). Each has a contact sensor ``feel_{piece}`` on its contacts
+(one net-force slot: found, force xyz in the world frame): what the partner feels there, whatever
+touches it. Rigid bones (``bone_*``) collide with the prosthetic bones.
 """
 
 from __future__ import annotations
@@ -39,8 +41,16 @@ import mujoco
 
 from softhand.hands import constants as const
 from softhand.hands.config import PartnerConfig
+from softhand.hands.envelope import hand_pieces
 from softhand.hands.layout import hand_layout
-from softhand.hands.skeleton import add_skeleton, add_touch_sensor, angle, joint_key, new_spec
+from softhand.hands.skeleton import (
+    add_contact_sensor,
+    add_piece,
+    add_skeleton,
+    angle,
+    joint_key,
+    new_spec,
+)
 
 __all__ = [
     "TISSUE_SEGMENTS",
@@ -51,7 +61,6 @@ __all__ = [
 ]
 
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
-_ELLIPSOID = mujoco.mjtGeom.mjGEOM_ELLIPSOID
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 _BONE_RGBA = (0.55, 0.42, 0.38, 1.0)
 _TISSUE_RGBA = (0.87, 0.68, 0.58, 0.5)
@@ -64,8 +73,6 @@ TISSUE_SEGMENTS: tuple[str, ...] = (
     "thumb_proximal",
     "thumb_distal",
     *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
-    "index_metacarpal",
-    "little_metacarpal",
 )
 
 _DIGIT_JOINTS = {"thumb": ("cmc", "mcp", "ip"), **{f: ("mcp", "pip", "dip") for f in const.FINGERS}}
@@ -176,41 +183,15 @@ def add_partner_hand(
             armature=10 * armature,
         )
 
-    # Tissues.
-    def tissue(body: mujoco.MjsBody, name: str, *, size: list[float], **kw) -> None:
-        body.add_geom(
-            name=f"{prefix}tissue_{name}",
-            contype=0,
-            conaffinity=0,
-            mass=0.0,
-            group=2,
-            rgba=list(_TISSUE_RGBA),
-            size=size,
-            **kw,
-        )
-        add_touch_sensor(spec, body, f"{prefix}feel_{name}", size=size, **kw)  # what it feels
-
-    xm, half_w, az = layout.palm_length_m, 0.5 * layout.width_m, 0.35 * t
-    for name, sign in (("palm", -1.0), ("back", 1.0)):
-        tissue(
-            palm,
-            name,
-            type=_ELLIPSOID,
-            pos=[0.5 * xm, 0.0, sign * (0.5 * t - az)],
-            size=[0.48 * xm, 0.95 * half_w, az],
-        )
-    for seg in TISSUE_SEGMENTS[2:]:
-        digit, part = seg.split("_")
-        d = layout.digits[digit]
-        length, radius = d.lengths_m[part], d.radii_m[part]
-        if part == "metacarpal" and digit != "thumb":
-            # the radial and ulnar borders of the palm, outside the palm/back ellipsoids
-            tissue(palm, seg, type=_CAPSULE, size=[radius, 0, 0], fromto=[*d.cmc_m, *d.base_m])
-            continue
-        end = length - radius if part == "distal" else length
-        tissue(
-            skel.bodies[seg], seg, type=_CAPSULE, size=[radius, 0, 0], fromto=[0, 0, 0, end, 0, 0]
-        )
+    # Tissues: one layer of envelope pieces, each with the sensor of what the partner feels there.
+    pieces = {p.name: p for p in hand_pieces(layout, split_palm=False)}
+    if set(pieces) != set(TISSUE_SEGMENTS):
+        raise RuntimeError(f"tissue pieces {sorted(pieces)} do not match {TISSUE_SEGMENTS}")
+    for name in TISSUE_SEGMENTS:
+        piece = pieces[name]
+        add_piece(spec, skel.bodies[piece.body], piece, f"{prefix}tissue_{name}", contype=0,
+                  conaffinity=0, mass=0.0, group=2, rgba=list(_TISSUE_RGBA))
+        add_contact_sensor(spec, f"{prefix}feel_{name}", f"{prefix}tissue_{name}", netforce=True)
 
     # Flexor tendons and servos.
     share = config.max_grip_force_n / const.PARTNER["grip_fingers"]

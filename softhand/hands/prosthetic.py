@@ -21,18 +21,24 @@ setpoint (actuator activation, clamped to the joint range) is held by a stiff se
 where it stopped under load, like a worm gear; the servo force is clamped to the stall torque
 grip_force / 5 x digit length / 2 (the power grip shared by five digits acting at mid-length).
 
-Skin regions (names as in the paper, Fig. 1; 1 = proximal, 3 = distal): one ellipsoid skin geom
-``skin_{Region}`` per region on the contact side of its link, contype = conaffinity = 0 (contacts
-come only from explicit ``<pair>`` elements added by the calibration stage), a site
-``touch_{Region}`` enclosing it and a touch sensor ``touch_{Region}`` on that site.
+Skin (:mod:`softhand.hands.envelope`): the hand's whole soft envelope is skin, one layer of convex
+pieces with no piece inside another at rest: a trimmed capsule on every phalanx and on the thumb
+metacarpal (the thenar), and the palm's convex hull cut into four quarters (palmar / dorsal x
+proximal / distal), each a convex mesh. Every piece is a geom ``skin_{Name}`` with
+contype = conaffinity = 0 (contacts only through explicit ``<pair>`` elements added by the
+calibration stage) and wears a design:
 
-- Thumb1 / Thumb2: palmar pads of the thumb's proximal / distal phalanx (the thumb has no middle
-  phalanx; its metacarpal has no region).
-- Index1..Little3: palmar pads of the proximal, middle and distal phalanges.
-- Palm1: proximal palm (between the thenar and hypothenar eminences, wrist crease to mid-palm).
-- Palm2: distal palm, the pad under the metacarpal heads (MCP joints).
-- Back1: proximal back of the hand (over the carpus and metacarpal bases).
-- Back2: distal back of the hand (over the metacarpal heads, the knuckles).
+- the 18 sensing regions (names as in the paper, Fig. 1; 1 = proximal, 3 = distal) each have one
+  piece and a sensor zone, a box site ``touch_{Region}`` over the piece's contact side, with a MuJoCo
+  contact sensor ``touch_{Region}`` on the contacts of that skin inside it (SENSOR_SLOTS slots; the
+  region's reading is the sum of their normal forces): the palmar half of a phalanx, the central
+  80 % of the palm's width on a palm quarter. Contacts elsewhere on the piece (a phalanx's dorsal
+  half, the palm's borders) are the region's *unsensed* skin: same design, force reported apart.
+- Thumb1 / Thumb2: proximal / distal phalanx of the thumb (it has no middle phalanx).
+- Index1..Little3: proximal, middle and distal phalanges.
+- Palm1 / Palm2: proximal / distal palmar quarter of the palm (Palm2 under the metacarpal heads).
+- Back1 / Back2: proximal / distal dorsal quarter (Back2 over the knuckles).
+- ``skin_Thenar``: the thenar, non-sensing skin wearing Palm1's design (UNSENSED_SKINS).
 
 The paper's text gives only "two areas on the palm and two on the back" (Fig. 1 is an image); the
 proximal/distal split above follows its 1 = proximal numbering and is an interpretation.
@@ -44,15 +50,26 @@ import math
 from dataclasses import dataclass
 
 import mujoco
+import numpy as np
 
 from softhand.hands import constants as const
 from softhand.hands.config import ProstheticConfig
+from softhand.hands.envelope import Piece, hand_pieces
 from softhand.hands.layout import HandLayout, hand_layout
-from softhand.hands.skeleton import LIMIT_SOLREF, add_skeleton, add_touch_sensor, new_spec
+from softhand.hands.skeleton import (
+    LIMIT_SOLREF,
+    SENSOR_ZONE_MARGIN_M,
+    add_contact_sensor,
+    add_piece,
+    add_skeleton,
+    new_spec,
+)
 from softhand.paper import paper
 
 __all__ = [
+    "REGION_PIECES",
     "REGION_SEGMENTS",
+    "UNSENSED_SKINS",
     "RegionInfo",
     "add_prosthetic_hand",
     "build_prosthetic_hand",
@@ -61,7 +78,7 @@ __all__ = [
     "regions",
 ]
 
-_ELLIPSOID = mujoco.mjtGeom.mjGEOM_ELLIPSOID
+_BOX = mujoco.mjtGeom.mjGEOM_BOX
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 
 #: Link (segment key) that carries each region's skin.
@@ -79,7 +96,20 @@ REGION_SEGMENTS: dict[str, str] = {
     "Back2": "palm",
 }
 
-#: Gap between a skin ellipsoid and the touch site that encloses it, per semi-axis (m).
+#: Envelope piece (softhand.hands.envelope) that carries each region's skin.
+REGION_PIECES: dict[str, str] = {
+    **{r: seg for r, seg in REGION_SEGMENTS.items() if seg != "palm"},
+    "Palm1": "palm_proximal",
+    "Palm2": "palm_distal",
+    "Back1": "back_proximal",
+    "Back2": "back_distal",
+}
+#: Non-sensing skin: name -> (envelope piece, region whose design it wears).
+UNSENSED_SKINS: dict[str, tuple[str, str]] = {"Thenar": ("thumb_metacarpal", "Palm1")}
+#: Share of the palm's half-width watched by a palm region's sensor zone (the borders are
+#: unsensed skin). assumption: the paper's palm sensors sat on the palm's faces, not its edges.
+_PALM_ZONE_WIDTH = 0.8
+
 _SKIN_RGBA = (0.93, 0.80, 0.70, 0.6)
 _BONE_RGBA = (0.35, 0.36, 0.40, 1.0)
 _SITE_RGBA = (0.2, 0.6, 1.0, 0.15)
@@ -113,46 +143,24 @@ def paper_regions() -> tuple[str, ...]:
     return names
 
 
-def _phalanx_pad(length: float, radius: float) -> tuple[list[float], list[float]]:
-    """Palmar skin pad of a phalanx in its digit frame: (centre, semi-axes), outer surface at -radius."""
-    half = (0.45 * length, 0.85 * radius, 0.6 * radius)
-    centre = (0.5 * length, 0.0, -radius + half[2])
-    return list(centre), list(half)
-
-
-def _palm_pads(layout: HandLayout) -> dict[str, tuple[list[float], list[float]]]:
-    """Palm1/Palm2 (palmar, z < 0) and Back1/Back2 (dorsal, z > 0) pads in the hand frame."""
-    xm, half_w, t = layout.palm_length_m, 0.5 * layout.width_m, layout.thickness_m
-    az = 0.35 * t
-    pads = {}
-    for side, sign in (("Palm", -1.0), ("Back", 1.0)):
-        z = sign * (0.5 * t - az)
-        pads[f"{side}1"] = ([0.265 * xm, 0.0, z], [0.205 * xm, 0.75 * half_w, az])
-        pads[f"{side}2"] = ([0.760 * xm, 0.0, z], [0.230 * xm, 0.90 * half_w, az])
-    return pads
-
-
-def _add_region(
-    spec: mujoco.MjSpec,
-    body: mujoco.MjsBody,
-    prefix: str,
-    region: str,
-    centre: list[float],
-    half: list[float],
-) -> None:
-    body.add_geom(
-        name=f"{prefix}skin_{region}",
-        type=_ELLIPSOID,
-        pos=centre,
-        size=half,
-        contype=0,
-        conaffinity=0,
-        mass=0.0,
-        group=1,
-        rgba=list(_SKIN_RGBA),
-    )
-    add_touch_sensor(spec, body, f"{prefix}touch_{region}", size=half, type=_ELLIPSOID,
-                     pos=centre, rgba=list(_SITE_RGBA))
+def _zone(piece: Piece, layout: HandLayout) -> tuple[list[float], list[float]]:
+    """Sensor zone of a region's piece, as a box (centre, half sizes) in the piece's body frame:
+    the contact side of the piece, reaching SENSOR_ZONE_MARGIN_M out beyond its surface and not
+    past the piece's cut faces (so no contact is counted by two regions)."""
+    lo, hi = (np.array(v, dtype=float) for v in piece.bounds())
+    m = SENSOR_ZONE_MARGIN_M
+    if piece.kind == "capsule":  # a phalanx, in its digit frame: the palmar (-z) half
+        lo = np.array([piece.fromto[0] - piece.radius, lo[1] - m, lo[2] - m])
+        hi = np.array([piece.fromto[3] + piece.radius, hi[1] + m, 0.0])
+    else:  # a palm quarter in the hand frame: its face (palmar or dorsal), central width
+        half_w = _PALM_ZONE_WIDTH * 0.5 * layout.width_m
+        lo[1], hi[1] = -half_w, half_w
+        if hi[2] <= 1e-9:  # palmar quarter: from the outside to the mid-plane
+            lo[2] -= m
+        else:
+            hi[2] += m
+        lo[0] = lo[0] if lo[0] > 1e-9 else 0.0
+    return list(0.5 * (lo + hi)), list(0.5 * (hi - lo))
 
 
 def _couple(spec: mujoco.MjSpec, name: str, follower: str, driver: str, ratio: float) -> None:
@@ -236,17 +244,24 @@ def add_prosthetic_hand(
     )
     regions_ = paper_regions()
 
-    # Skins, sites and touch sensors.
-    palm_pads = _palm_pads(layout)
-    for region in regions_:
-        seg = REGION_SEGMENTS[region]
-        if seg == "palm":
-            centre, half = palm_pads[region]
-        else:
-            digit, part = seg.split("_")
-            d = layout.digits[digit]
-            centre, half = _phalanx_pad(d.lengths_m[part], d.radii_m[part])
-        _add_region(spec, skel.bodies[seg], prefix, region, centre, half)
+    # Skins: every envelope piece; sensing regions also get a zone and a contact sensor.
+    pieces = {p.name: p for p in hand_pieces(layout, split_palm=True)}
+    skin_of = {REGION_PIECES[r]: r for r in regions_}
+    skin_of.update({piece: name for name, (piece, _) in UNSENSED_SKINS.items()})
+    if set(skin_of) != set(pieces):
+        raise RuntimeError(f"skin pieces {sorted(skin_of)} do not match the envelope's "
+                           f"{sorted(pieces)}")
+    for piece_name, skin in skin_of.items():
+        piece = pieces[piece_name]
+        body = skel.bodies[piece.body]
+        add_piece(spec, body, piece, f"{prefix}skin_{skin}", contype=0, conaffinity=0, mass=0.0,
+                  group=1, rgba=list(_SKIN_RGBA))
+        if skin in regions_:
+            centre, half = _zone(piece, layout)
+            body.add_site(name=f"{prefix}touch_{skin}", type=_BOX, pos=centre, size=half,
+                          group=4, rgba=list(_SITE_RGBA))
+            add_contact_sensor(spec, f"{prefix}touch_{skin}", f"{prefix}skin_{skin}",
+                               site=f"{prefix}touch_{skin}")
 
     # Couplings and motors. Ratios make all joints of a digit reach their upper limits together.
     grip_share = config.grip_force_n / const.PROSTHETIC["grip_digits"]

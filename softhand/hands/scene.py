@@ -1,11 +1,13 @@
 """The handshake scene: both hands in one spec, with softhand's simulation options.
 
 World frame: +Z up, gravity along -Z, no floor. The prosthetic hand (prefix ``pro_``) is fixed to
-the world through the body ``pro_wrist`` in a handshake pose: fingers along +X, thumb up (+Z), palm
+the world through the body ``pro_wrist`` in a handshake pose: fingers forward (+X), thumb up, palm
 facing +Y. The partner hand (prefix ``hum_``) rides the free body ``hum_arm``, held by a soft weld
-(the arm's compliance) to the mocap target ``hum_base``, and faces it: palm facing -Y, its long axis
-turned by SceneConfig.crossing_angle_deg from antiparallel (fingers along -X) so that its fingers
-point down across the prosthetic palm (partner_quat()). The env drives ``hum_base``: from its start
+(the arm's compliance) to the mocap target ``hum_base``, and faces it: palm facing -Y, fingers
+towards -X. The two long axes cross at SceneConfig.crossing_angle_deg in the plane of the touching
+palms, shared equally: each hand's fingers point down by half of it (prosthetic_quat(),
+partner_quat()), so each forearm rises gently towards its elbow and each hand's fingers lie across
+the other's palm. The env drives ``hum_base``: from its start
 pose (where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
 
 Contact pose: the palmar surfaces touch (along Y) and the two hands' web spaces (between thumb and
@@ -38,29 +40,37 @@ ARM_MASS_KG = 0.3
 __all__ = [
     "ARM_MASS_KG",
     "ARM_TIMECONST_S",
-    "PROSTHETIC_QUAT",
     "partner_contact_pose",
     "partner_quat",
     "partner_start_pose",
+    "prosthetic_quat",
     "scene_spec",
     "web_point",
 ]
 
-#: Hand frame -> world: prosthetic x -> +X, y (radial) -> +Z, z (dorsal) -> -Y.
-PROSTHETIC_QUAT: tuple[float, ...] = tuple(
-    quat_from_axes(np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, -1.0, 0]))
-)
+def prosthetic_quat(crossing_angle_deg: float) -> np.ndarray:
+    """Prosthetic hand frame -> world: palm facing +Y, fingers turned down by half the crossing
+    angle (the other half is the partner's, partner_quat), thumb side up.
+
+    At 0 the fingers point along +X and the thumb up (+Z); at angle b the fingers point along
+    (cos b/2, 0, -sin b/2) and the radial side along (sin b/2, 0, cos b/2); the back faces -Y.
+    """
+    h = np.radians(0.5 * crossing_angle_deg)
+    fingers = np.array([np.cos(h), 0.0, -np.sin(h)])
+    radial = np.array([np.sin(h), 0.0, np.cos(h)])
+    return np.array(quat_from_axes(fingers, radial, np.array([0.0, -1.0, 0.0])))
 
 
 def partner_quat(crossing_angle_deg: float) -> np.ndarray:
-    """Partner hand frame -> world: palm facing -Y, fingers turned down by the crossing angle.
+    """Partner hand frame -> world: palm facing -Y, fingers turned down by half the crossing angle.
 
     At 0 the fingers point along -X and the thumb up (+Z); at angle b the fingers point along
-    (-cos b, 0, -sin b) and the radial side along (-sin b, 0, cos b); the back faces +Y.
+    (-cos b/2, 0, -sin b/2) and the radial side along (-sin b/2, 0, cos b/2); the back faces +Y.
+    Both forearms are then inclined by b/2, rising towards their elbows.
     """
-    b = np.radians(crossing_angle_deg)
-    fingers = np.array([-np.cos(b), 0.0, -np.sin(b)])
-    radial = np.array([-np.sin(b), 0.0, np.cos(b)])
+    h = np.radians(0.5 * crossing_angle_deg)
+    fingers = np.array([-np.cos(h), 0.0, -np.sin(h)])
+    radial = np.array([-np.sin(h), 0.0, np.cos(h)])
     return np.array(quat_from_axes(fingers, radial, np.array([0.0, 1.0, 0.0])))
 
 
@@ -79,7 +89,8 @@ def partner_contact_pose(config: SceneConfig | None = None) -> tuple[np.ndarray,
     pro = hand_layout(config.prosthetic.hand)
     hum = hand_layout(config.partner.hand)
     quat = partner_quat(config.crossing_angle_deg)
-    r_pro, r_hum = _rotation(np.array(PROSTHETIC_QUAT)), _rotation(quat)
+    r_pro = _rotation(prosthetic_quat(config.crossing_angle_deg))
+    r_hum = _rotation(quat)
     wrist = np.asarray(config.prosthetic_wrist_pos_m, float)
     pos = wrist + r_pro @ web_point(pro) - r_hum @ web_point(hum)
     pos[1] = wrist[1] + 0.5 * (pro.thickness_m + hum.thickness_m)  # palmar surfaces touch along Y
@@ -121,7 +132,7 @@ def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
     wrist = spec.worldbody.add_body(
         name="pro_wrist",
         pos=[float(v) for v in config.prosthetic_wrist_pos_m],
-        quat=list(PROSTHETIC_QUAT),
+        quat=prosthetic_quat(config.crossing_angle_deg).tolist(),
     )
     add_prosthetic_hand(spec, wrist, config.prosthetic, "pro_")
     pos, quat = partner_start_pose(config)

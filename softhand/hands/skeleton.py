@@ -16,9 +16,11 @@ Names (``prefix`` + ...):
 
 Every joint flexes for a positive angle. Digit bodies use the digit frame: +x along the segment,
 +y the flexion axis, -z the palmar (pad) side; long fingers share the hand frame's orientation.
-The thumb's first joint ``thumb_rot`` turns about the hand's -x axis through the CMC: 0 is the
-adducted thumb lying in the palm plane (pad facing the index), positive swings it palmar into
-opposition. Bones get the (contype, conaffinity) bits passed in, so that each hand's bones touch only
+The thumb's first joint ``thumb_rot`` is palmar abduction, about the axis in the palm plane
+perpendicular to the adducted metacarpal, through the CMC: 0 is the adducted thumb lying in the palm
+plane (pad facing the index), positive swings it palmar into opposition ([AAOS65] palmar abduction
+0-70 deg), carrying its flexion plane along, so flexing an opposed thumb moves its pad across the
+palm towards the fingers. Bones get the (contype, conaffinity) bits passed in, so that each hand's bones touch only
 the other hand's bones; they carry the segment masses (density x envelope volume).
 """
 
@@ -32,15 +34,19 @@ import mujoco
 import numpy as np
 
 from softhand.hands import constants as const
+from softhand.hands.envelope import Piece
 from softhand.hands.layout import HandLayout
 
 __all__ = [
     "LIMIT_SOLREF",
-    "TOUCH_ZONE_MARGIN_M",
+    "SENSOR_SLOTS",
+    "SENSOR_ZONE_MARGIN_M",
     "Skeleton",
+    "add_contact_sensor",
+    "add_piece",
     "add_skeleton",
-    "add_touch_sensor",
     "angle",
+    "contact_sensor_force",
     "joint_key",
     "new_spec",
     "quat_from_axes",
@@ -51,18 +57,47 @@ _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
 _SPHERE = mujoco.mjtGeom.mjGEOM_SPHERE
 _HINGE = mujoco.mjtJoint.mjJNT_HINGE
 
-#: How far a touch sensor's zone reaches beyond the soft geom it encloses (m).
-TOUCH_ZONE_MARGIN_M = 0.0015
+#: How far a sensor zone reaches out beyond the skin surface it watches (m). A contact point lies
+#: half-way through the overlap of the two geoms, so a zone must reach half the deepest pair
+#: overlap out from the surface: 20 N, the calibrated top, takes at most ~13 mm for pocket2-sil
+#: skin in series with human tissue (contacts deeper than that are reported beyond range anyway).
+SENSOR_ZONE_MARGIN_M = 0.008
+#: Contacts one region sensor can report per step (MuJoCo contact sensor slots, largest first);
+#: a region that meets more tissue geoms at once is flagged (``found`` > slots).
+SENSOR_SLOTS = 10
+
+_MESH = mujoco.mjtGeom.mjGEOM_MESH
 
 
-def add_touch_sensor(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, *,
-                     size: list[float], **placement) -> None:
-    """A site named ``name`` enclosing a soft geom of ``size`` (same type and placement, every
-    nonzero size grown by TOUCH_ZONE_MARGIN_M) and a touch sensor of the same name on it."""
-    zone = [v + TOUCH_ZONE_MARGIN_M if v > 0 else 0.0 for v in size]
-    body.add_site(name=name, size=zone, group=4, **placement)
-    spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_TOUCH,
-                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name)
+def add_piece(spec: mujoco.MjSpec, body: mujoco.MjsBody, piece: Piece, name: str,
+              **attributes) -> mujoco.MjsGeom:
+    """A geom named ``name`` with the shape of an envelope piece (a capsule, or a convex mesh
+    ``{name}_mesh`` of the piece's hull vertices), in ``body``'s frame."""
+    if piece.kind == "capsule":
+        return body.add_geom(name=name, type=_CAPSULE, fromto=[float(v) for v in piece.fromto],
+                             size=[piece.radius, 0.0, 0.0], **attributes)
+    spec.add_mesh(name=f"{name}_mesh", uservert=[float(v) for v in piece.vertices.reshape(-1)])
+    return body.add_geom(name=name, type=_MESH, meshname=f"{name}_mesh", **attributes)
+
+
+def add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, *, site: str | None = None,
+                       netforce: bool = False) -> None:
+    """A MuJoCo contact sensor ``name`` on the contacts of ``geom`` (inside ``site``'s volume when
+    given): ``SENSOR_SLOTS`` slots of (found, normal, tangential, tangential force), largest force
+    first, or one net-force slot (``netforce``, global frame)."""
+    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT)
+    if site is None:
+        sensor.objtype, sensor.objname = mujoco.mjtObj.mjOBJ_GEOM, geom
+    else:
+        sensor.objtype, sensor.objname = mujoco.mjtObj.mjOBJ_SITE, site
+        sensor.reftype, sensor.refname = mujoco.mjtObj.mjOBJ_GEOM, geom
+    # data = found | force (bits 0, 1); reduce: maxforce 2, netforce 3
+    sensor.intprm[0:3] = [3, 3 if netforce else 2, 1 if netforce else SENSOR_SLOTS]
+
+
+def contact_sensor_force(values: np.ndarray) -> np.ndarray:
+    """Sum of normal forces (N) per sensor from contact-sensor readings shaped (..., slots, 4)."""
+    return values[..., 1].sum(axis=-1)
 
 
 #: solref (time constant s, damping ratio) of joint limits and joint couplings. MuJoCo's default
@@ -221,9 +256,9 @@ def add_skeleton(
             bodies[f"{digit}_{seg}"] = body
             (short,) = segment_joints(digit, seg)
             hinge(body, digit, short, (0.0, 1.0, 0.0))
-            length, radius = d.lengths_m[seg], d.radii_m[seg]
-            end = length - (radius - skin) if seg == "distal" else length
-            bone(body, f"{digit}_{seg}", (0, 0, 0), (end, 0, 0), radius - skin, d.masses_kg[seg])
+            length, radius = d.lengths_m[seg], d.bone_radii_m[seg]
+            end = length - skin - radius if seg == "distal" else length
+            bone(body, f"{digit}_{seg}", (0, 0, 0), (end, 0, 0), radius, d.masses_kg[seg])
             pos = (length, 0.0, 0.0)
         body.add_site(name=f"{prefix}{digit}_tip", type=_SPHERE, size=[0.002, 0, 0],
                       pos=[float(pos[0]), 0.0, 0.0], group=4)
@@ -235,7 +270,12 @@ def add_skeleton(
     # Thumb: metacarpal frame from the spread angle; thumb_rot about the hand's -x axis.
     d = layout.digits["thumb"]
     x, y, z = _thumb_frame(layout.thumb_spread_rad)
-    rot_axis = np.array([x @ [-1, 0, 0], y @ [-1, 0, 0], z @ [-1, 0, 0]])  # hand -x in thumb frame
+    # palmar abduction: about the thumb frame's z, the palm-plane axis perpendicular to the
+    # adducted metacarpal, so that positive rotation swings the thumb out of the palm plane to the
+    # palmar side while its flexion plane turns with it (flexion then carries the pad across the
+    # palm towards the fingers); the old axis, the hand's -x, was nearly the thumb's own long axis
+    # and turned the flexion plane dorsal (an opposed thumb folded over the back of the hand)
+    rot_axis = np.array([0.0, 0.0, 1.0])
     body = palm.add_body(
         name=f"{prefix}thumb_metacarpal",
         pos=[float(v) for v in d.cmc_m],
@@ -249,7 +289,7 @@ def add_skeleton(
         "thumb_metacarpal",
         (0, 0, 0),
         (d.lengths_m["metacarpal"], 0, 0),
-        d.radii_m["metacarpal"] - skin,
+        d.bone_radii_m["metacarpal"],
         d.masses_kg["metacarpal"],
     )
     chain(body, "thumb", (d.lengths_m["metacarpal"], 0.0, 0.0), ("proximal", "distal"))

@@ -22,7 +22,7 @@ from scipy.interpolate import BSpline
 
 from softhand.validate import check_mapping, check_numbers, join
 
-__all__ = ["ElasticLaw", "basis_matrix", "knot_vector"]
+__all__ = ["ElasticLaw", "basis_matrix", "knot_vector", "knots_at"]
 
 _DEGREE = 2  # stiffness degree; force is one degree higher
 
@@ -35,6 +35,16 @@ def knot_vector(max_mm: float, n_basis: int) -> np.ndarray:
         raise ValueError(f"n_basis = {n_basis!r} must be >= {_DEGREE + 1}")
     inner = np.linspace(0.0, max_mm, n_basis - _DEGREE + 1)
     return np.concatenate([[0.0] * _DEGREE, inner, [max_mm] * _DEGREE])
+
+
+def knots_at(max_mm: float, inner_mm) -> np.ndarray:
+    """Clamped knots on [0, max_mm] with the given interior knots (mm; those outside (0, max_mm)
+    are dropped)."""
+    if not np.isfinite(max_mm) or max_mm <= 0:
+        raise ValueError(f"max_mm = {max_mm!r} must be finite and > 0")
+    inner = np.unique(np.asarray(inner_mm, dtype=float))
+    inner = inner[(inner > 0) & (inner < max_mm)]
+    return np.concatenate([[0.0] * (_DEGREE + 1), inner, [max_mm] * (_DEGREE + 1)])
 
 
 def basis_matrix(knots: np.ndarray, delta_mm: np.ndarray) -> np.ndarray:

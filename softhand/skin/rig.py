@@ -27,8 +27,12 @@ from softhand.skin.soft_contact import SoftContactParams
 __all__ = ["REPRESENTATIONS", "RigCurve", "RigSettings", "build_rig", "run_rig"]
 
 REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
-SKIN_HALF_AXES_M = (0.005, 0.008, 0.0045)  # phalanx: 10 mm long, 16 mm wide, skin top 4.5 mm up
-BONE_DEPTH_M = 0.0045  # the rigid bone's top lies this far under the skin's top: a hard stop
+SKIN_HALF_AXES_M = (0.005, 0.008, 0.0125)  # phalanx: 10 mm long, 16 mm wide; 25 mm tall so
+# that a plate 8.6 mm deep (human tissue at 20 N) is still far from its far side (a convex
+# penetration depth is only defined while the plate is inside the near half)
+#: The rigid bone's top lies this far under the skin's top: a hard stop below the deepest
+#: calibrated indentation (the human law at 20 N, 8.6 mm; the designs reach 4.6 mm at 20 N).
+BONE_DEPTH_M = 0.0095
 PLATE_HALF_M = (0.010, 0.005, 0.002)  # the paper's 20 x 10 mm indenter, 4 mm thick
 INTEGRATORS = ("discrete", "implicitfast", "euler")
 

@@ -111,7 +111,8 @@ def rebuild_index(out: str | Path = SKINS_DIR,
 
 
 def _merged(cal: SkinCalibration, out: Path) -> SkinCalibration:
-    """Keep representations of an existing file that were not recalibrated this time."""
+    """Keep representations (and the pair law) of an existing file that were not recalibrated
+    this time."""
     from softhand.skin.files import load_calibration
 
     try:
@@ -120,7 +121,8 @@ def _merged(cal: SkinCalibration, out: Path) -> SkinCalibration:
         return cal
     reps = {k: v for k, v in old.representations.items() if k not in cal.representations}
     reps.update(cal.representations)
-    return SkinCalibration(cal.design, cal.law, reps, cal.provenance)
+    pair = cal.pair_law if cal.pair_law is not None else old.pair_law
+    return SkinCalibration(cal.design, cal.law, reps, cal.provenance, pair)
 
 
 def summary_table(summary: dict[str, Any]) -> str:

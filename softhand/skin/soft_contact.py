@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from scipy.optimize import least_squares
 
-from softhand.laws.fit import FitStatus, fit_status, paired_arrays
+from softhand.laws.fit import FitStatus, fit_status, force_weights, paired_arrays
 from softhand.validate import check_mapping, check_number, check_numbers, join
 
 __all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
@@ -155,6 +155,8 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
     lightest body the skin will touch: contact damping is explicit under ``implicitfast``, so a
     damping set for a heavier body makes a light one unstable. ``initial`` replaces the
     multi-start search by one start (a close law, e.g. the skin's own when fitting skin + tissue).
+    Residuals are weighted by :func:`softhand.laws.fit.force_weights` (absolute up to 2 N,
+    relative above); ``rms_N`` is the plain RMS force error over the whole curve.
     """
     d, f = paired_arrays(delta_mm, force_N, ("delta_mm", "force_N"), min_size=5)
     keep = d > 0
@@ -177,6 +179,7 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
         return s * dd**2 / si[1] ** 2 * r_m / (1 - dd)
 
     r = d * 1e-3
+    w = force_weights(f)  # absolute up to 2 N, relative above (curves reach 20 N)
     best = None
     # the sigmoid's shape is not convex to fit: several starts, or one close law
     starts = [np.array([np.log(secant_end), dw0, 0.3, 1.0, mid0, pw0])
@@ -186,7 +189,7 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
         starts = [np.clip([np.log(initial.stiffness), dw, d0 / dw, width / top, mid, power],
                           lower + 1e-9, upper - 1e-9)]
     for x0 in starts:
-        res = least_squares(lambda p: model(p, r) - f, x0, bounds=(lower, upper),
+        res = least_squares(lambda p: w * (model(p, r) - f), x0, bounds=(lower, upper),
                             method="trf", max_nfev=2000, xtol=1e-12, ftol=1e-12)
         if best is None or res.cost < best.cost:
             best = res

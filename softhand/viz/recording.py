@@ -16,9 +16,10 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 | ``skin/designs`` | TextDocument | static | Markdown table: region, body, skin design |
 | ``partner/phase`` | TextLog | at changes | partner phase (``reach``, ``grip``, ...) |
 
-(1) Capsules3D, Ellipsoids3D, Boxes3D or Cylinders3D, as the MuJoCo geom type (procedural hands
-have no meshes). (2) A region's skin geom: shape and label ``{region}: {design}`` static, colour
-force_colors(force) per frame. ``forces/{region}`` also holds a static SeriesLines (its name).
+(1) Capsules3D, Ellipsoids3D, Boxes3D, Cylinders3D or Mesh3D (the palm's convex skin and tissue
+pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom: shape and label
+``{region}: {design}`` static (meshes: no label), colour force_colors(force) per frame.
+``forces/{region}`` also holds a static SeriesLines (its name).
 Geom and body names are MuJoCo's (``{body}`` e.g. ``pro_index_proximal``, ``hum_base``); unnamed
 geoms are called ``geom{id}``. Body poses are world poses, so the body entities are flat (not nested
 along the kinematic tree).
@@ -212,7 +213,18 @@ def _geom_shape(model: mujoco.MjModel, g: int) -> tuple[type, dict[str, Any]] | 
         return rr.Capsules3D, {**axial, "translations": [pos - size[1] * rot[:, 2]], **pose}
     if kind == geom.mjGEOM_CYLINDER:
         return rr.Cylinders3D, {**axial, "centers": [pos], **pose}
-    return None  # planes, meshes, height fields, SDFs: not in the procedural hands
+    if kind == geom.mjGEOM_MESH:  # the palm's convex skin and tissue pieces
+        m = model.geom_dataid[g]
+        v0, nv = model.mesh_vertadr[m], model.mesh_vertnum[m]
+        f0, nf = model.mesh_faceadr[m], model.mesh_facenum[m]
+        verts = model.mesh_vert[v0:v0 + nv] @ rot.T + pos
+        return rr.Mesh3D, {"vertex_positions": verts, "triangle_indices": model.mesh_face[f0:f0 + nf]}
+    return None  # planes, height fields, SDFs: not in the procedural hands
+
+
+def _colour_field(archetype: type) -> str:
+    """The field that carries a shape's colour: meshes have an albedo, the others colours."""
+    return "albedo_factor" if archetype is rr.Mesh3D else "colors"
 
 
 def _validate(path: Path, model: mujoco.MjModel, frames: HandshakeFrames, max_force_N: float):
@@ -283,15 +295,17 @@ def _log_recording(
         name = model.geom(g).name or f"geom{g}"
         entity = _path("world", "bodies", body, name)
         region = skin.get(name)
+        colour = _colour_field(archetype)
         if region is None:  # a plain geom: static colour
             rgba = model.geom_rgba[g]
-            fields["colors"] = [np.round(255 * rgba).astype(np.uint8)]
+            fields[colour] = [np.round(255 * rgba).astype(np.uint8)]
             log(entity, archetype.from_fields(**fields), static=True)
             continue
-        fields["labels"] = [f"{region}: {frames.skin_designs[region]}"]
+        if archetype is not rr.Mesh3D:
+            fields["labels"] = [f"{region}: {frames.skin_designs[region]}"]
         log(entity, archetype.from_fields(**fields), static=True)
         colors = force_colors(forces[region], max_force_N=max_force_N)
-        send(entity, time, archetype.columns(colors=colors))
+        send(entity, time, archetype.columns(**{colour: colors}))
 
     pos, quat = _body_poses(model, frames, bodies)
     for k, b in enumerate(bodies):
