@@ -368,7 +368,7 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     kin = summary["kinematics"]
     flex = ", ".join(f"{d} {v:.0f}" for d, v in kin["prosthetic_flexion_deg"].items())
     click.echo(f"prosthetic flexion reached (deg): {flex}; thumb rotation "
-               f"{kin['prosthetic_thumb_rotation_deg']:.0f}; regions touched: "
+               f"{max(kin['prosthetic_thumb_rotation_deg'], 0.0):.0f}; regions touched: "
                f"{', '.join(kin['touched']) or '-'}")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))

@@ -65,14 +65,14 @@ def test_soft_contact_fit_recovers_known_parameters():
     np.testing.assert_allclose(fit.solimp, KNOWN.solimp, rtol=0.02)
 
 
-@pytest.mark.slow
-def test_soft_contact_fits_every_fe_loading_curve_to_20_newtons_within_5_percent():
-    """One solref/solimp per skin over the whole 0-20 N ramp: the impedance sigmoid cannot follow
-    a pocket's soft start and closing knee exactly (README: up to 4.5 % of 2 N below 2 N)."""
+def test_shipped_soft_contact_follows_every_fe_loading_curve_to_20_newtons_within_5_percent():
+    """The shipped solref/solimp of each design against its whole 0-20 N FE ramp (closed-form rest
+    law): the impedance sigmoid cannot follow a pocket's soft start and closing knee exactly
+    (README: up to 4.5 % of 2 N below 2 N). Refitting is covered by the calibration test."""
     worst_low = worst_high = 0.0
     for path in sorted(FE.glob("*.csv")):
         _, d, f = _ramp(load_curve(path))
-        params = fit_soft_contact(d, f)[0]
+        params = load_calibration(path.stem).soft_contact
         err = split_errors(params.force(d[1:]), f[1:])
         worst_low = max(worst_low, err["rms_pct_of_2N_to_2N"])
         worst_high = max(worst_high, err["rms_pct_above_2N"])

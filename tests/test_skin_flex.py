@@ -24,9 +24,11 @@ FE = Path(__file__).resolve().parents[1] / "calibration" / "fe"
 COARSE = {"n_length": 1, "n_width": 6, "n_height": 2}  # fast mesh where the mesh is not the point
 
 
-def _ramp(name: str) -> tuple[np.ndarray, np.ndarray]:
+def _ramp(name: str, top_N: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """The FE loading ramp up to ``top_N`` (a flex pad is fitted to social-touch forces; the FE
+    curves go on to 20 N)."""
     data = np.genfromtxt(FE / f"{name}.csv", delimiter=",", names=True)
-    ramp = data[data["hold"] == 0]
+    ramp = data[(data["hold"] == 0) & (data["force_N"] <= top_N)]
     return ramp["displacement_mm"], ramp["force_N"]
 
 

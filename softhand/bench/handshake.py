@@ -10,9 +10,9 @@ Measures, in one process on this machine (``softhand bench handshake``):
   0.5 ms (largest difference of a region's mean and peak force, relative change of the summed
   mean forces, whether the regions over 2 N are the same);
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
-  wearing rigid skins (stock contact, only the tissue indents), the commercial skin (prosthetic-102l) and the paper's designs: per skin and
-  region the peak force and the peak contact area, the regions over 2 N and their overlap with the
-  paper's Fig. 4 set.
+  wearing rigid skins (stock contact, only the tissue indents), the commercial skin
+  (prosthetic-102l) and the paper's designs: per skin and region the peak force and the peak
+  contact area, the regions over 2 N and their overlap with the paper's Fig. 4 set.
 
 Timings are wall-clock seconds of this machine; they are reported, never asserted by tests.
 Lives in the last stage because it times the recording too.
