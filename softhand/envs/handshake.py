@@ -304,7 +304,7 @@ class HandshakeEnv(gym.Env):
         end = k + self.frame_skip
         row = self._mocap_row
         # sensors are read once per action step: skip them on the inner steps (they do not act on
-        # the dynamics; 37 touch sensors are ~5 % of a step)
+        # the dynamics; 35 contact sensors, read at each action)
         flags = opt.disableflags
         opt.disableflags = flags | _NO_SENSORS
         try:

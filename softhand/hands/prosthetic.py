@@ -122,9 +122,9 @@ class RegionInfo:
     Attributes:
         region: paper name, e.g. "Middle2".
         body: body that carries the skin.
-        geom: the skin ellipsoid geom.
-        site: the touch-sensor zone enclosing the skin.
-        sensor: the touch sensor on that site.
+        geom: the skin geom (a capsule on a phalanx, a convex mesh on the palm).
+        site: the sensor zone, a box over the skin's contact side.
+        sensor: the contact sensor on the skin's contacts inside that site.
     """
 
     region: str
@@ -343,7 +343,7 @@ def build_prosthetic_hand(
 def regions(
     model_or_spec: mujoco.MjModel | mujoco.MjSpec, prefix: str = "pro_"
 ) -> dict[str, RegionInfo]:
-    """Region name -> names of its body, skin geom, site and touch sensor, in the paper's order.
+    """Region name -> names of its body, skin geom, site and contact sensor, in the paper's order.
 
     Raises:
         ValueError: if an element of a region is missing from ``model_or_spec``.

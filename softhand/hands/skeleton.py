@@ -121,7 +121,7 @@ def new_spec(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.gravity = [0.0, 0.0, -gravity_m_s2]
-    # convex collision (ellipsoid skins) converged to 0.1 mm instead of 1 um: a quarter of a
+    # convex collision (palm meshes, the old ellipsoid skins) converged to 0.1 mm instead of 1 um: a quarter of a
     # handshake step saved; region forces change by < 4 mN, depths by < 0.08 mm (measured at four
     # instants of a handshake against 1e-6)
     spec.option.ccd_tolerance = 1e-4
