@@ -31,6 +31,7 @@ import json
 import os
 import signal
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -120,6 +121,12 @@ def _interrupted() -> NoReturn:
 @click.version_option(__version__, prog_name="softhand")
 def main() -> None:
     """softhand: lifelike prosthetic skins, from FE indentation to MuJoCo."""
+    warnings.formatwarning = _one_line_warning
+
+
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning as the command line shows it: one line, its class and message, no source."""
+    return f"warning ({category.__name__}): {message}\n"
 
 
 @main.group()

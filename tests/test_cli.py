@@ -171,3 +171,14 @@ def test_handshake_json_and_recording(tmp_path):
 def test_handshake_bad_input_names_the_value(args, needle):
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 2 and needle in res.output
+
+
+def test_warnings_print_as_one_line_on_the_command_line():
+    """A CalibratedRangeWarning (or any warning) reaches a CLI user as one line naming its class,
+    without the source line Python shows by default."""
+    from softhand.cli import _one_line_warning
+    from softhand.envs.skins import CalibratedRangeWarning
+
+    text = _one_line_warning(CalibratedRangeWarning("pair X: 8 N is beyond 7 N"),
+                             CalibratedRangeWarning, "/some/file.py", 12, "source line")
+    assert text == "warning (CalibratedRangeWarning): pair X: 8 N is beyond 7 N\n"
