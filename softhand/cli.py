@@ -18,7 +18,7 @@ Every argument and input file is checked before any work starts. Exit status:
 2  bad input: one line ``error: ...`` naming the flag (or file, skin and key), the value and
    the allowed range; nothing computed, nothing written
 3  an FE run or a calibration did not converge (what finished is written)
-130 interrupted by Ctrl-C: what had finished is written (atomically), nothing partial
+130 interrupted by Ctrl-C or SIGTERM: what had finished is written (atomically), nothing partial
 == ===================================================================================
 
 Default folders come from :mod:`softhand.paths` (the same for every command). Writing into the
@@ -112,7 +112,7 @@ def _caused_by_interrupt(exc: BaseException) -> bool:
 def _interrupted() -> NoReturn:
     """Ctrl-C: one line, exit 130; a second Ctrl-C while exiting is ignored."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    click.echo("interrupted (Ctrl-C); nothing was written", err=True)
+    click.echo(f"interrupted ({_STOP['by']}); nothing was written", err=True)
     sys.stdout.flush()
     sys.exit(EXIT_INTERRUPTED)
 
@@ -122,6 +122,18 @@ def _interrupted() -> NoReturn:
 def main() -> None:
     """softhand: lifelike prosthetic skins, from FE indentation to MuJoCo."""
     warnings.formatwarning = _one_line_warning
+    signal.signal(signal.SIGTERM, _terminated)
+
+
+#: What stopped the command: Ctrl-C, or SIGTERM (a ``kill``, a scheduler's time limit).
+_STOP = {"by": "Ctrl-C"}
+
+
+def _terminated(signum, frame) -> NoReturn:
+    """SIGTERM takes Ctrl-C's path: a batch terminates its workers and writes what finished (the
+    default action killed this process alone and left the spawned workers running as orphans)."""
+    _STOP["by"] = "SIGTERM"
+    raise KeyboardInterrupt
 
 
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
@@ -191,7 +203,7 @@ def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[
     """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing."""
     where = f"wrote {written} of {total} {what} to {out}"
     if interrupted:
-        raise Stopped(f"interrupted (Ctrl-C): {where}; missing: {', '.join(missing)}",
+        raise Stopped(f"interrupted ({_STOP['by']}): {where}; missing: {', '.join(missing)}",
                       EXIT_INTERRUPTED)
     if missing:
         reasons = "; ".join(f"{n}: {why}" for n, why in missing.items())

@@ -108,3 +108,45 @@ def test_no_temporary_file_is_left_by_an_interrupted_write(tmp_path):
         raise Boom
     assert target.read_text() == "old"
     assert [p.name for p in Path(tmp_path).iterdir()] == ["f.txt"]
+
+
+def _session_processes(session: int) -> list[int]:
+    """Pids of the live processes whose session id is ``session`` (Linux /proc)."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()
+        if fields[0] != "Z" and int(fields[3]) == session:  # state, ppid, pgrp, session
+            pids.append(int(entry.name))
+    return pids
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_sigterm_to_the_command_alone_stops_its_workers_too(tmp_path):
+    """SIGTERM to the main process only (a kill, a scheduler's limit), not the group: the sweep
+    stops as on Ctrl-C, keeps the finished design, exits 130 and leaves no worker running (before,
+    the default action killed the main process alone and its two workers ran on as orphans)."""
+    out_dir = tmp_path / "fe"
+    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
+                   "--mesh", "fine", "--hold", "0", "--max-force", "10", "--threads", "2",
+                   "--design", "solid-pu", "--design", "pocket2-sil", "--out", str(out_dir)])
+    seen = ""
+    while "1/2" not in seen:
+        ch = proc.stderr.read(1)
+        if not ch:
+            break
+        seen += ch
+    assert "1/2" in seen, seen[-500:]
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=HANG_S)
+    assert proc.returncode == 130, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("interrupted (SIGTERM): wrote 1 of 2 designs"), last
+    assert sorted(p.name for p in out_dir.iterdir()) == ["solid-pu.csv", "summary.json"]
+    assert _session_processes(proc.pid) == []
