@@ -266,3 +266,12 @@ def test_shipped_mjcf_is_the_simulated_model():
             break
     assert steps > 1000 and total > 100.0  # a whole handshake, with contact
     assert worst <= 1e-9
+
+
+def test_a_region_has_contact_area_exactly_when_its_sensor_reads_force():
+    """Areas count the contacts inside a region's sensor zone, as its force does: the unsensed
+    skin (dorsal phalanges, palm borders) adds to neither (before, Back2 showed 701 mm^2 at 0 N)."""
+    table = run_handshake(seed=0).table()
+    for region, v in table.items():
+        assert (v["peak_area_mm2"] > 0) == (v["peak_N"] > 0), (region, v)
+    assert sum(v["peak_N"] > 0 for v in table.values()) >= 5

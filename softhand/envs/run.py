@@ -170,11 +170,16 @@ class ContactAreas:
     to first order in delta, never more than the smaller sphere's cross-section). Softer skins
     sink deeper at the same force, so their areas grow (the paper's argument for compliant
     skins); the deformed patch of a real skin is larger still (an estimate, not an FE result).
+    With ``zones`` (the regions' sensor sites), only contacts inside a region's zone count, as for
+    its force: the area is what the region's sensor sees.
     """
 
     def __init__(self, model: mujoco.MjModel, region_geoms: list[int],
-                 laws: Mapping[tuple[int, int], tuple[int, float]] | None = None) -> None:
+                 laws: Mapping[tuple[int, int], tuple[int, float]] | None = None,
+                 zones: list[int] | None = None) -> None:
         self.laws = dict(laws or {})
+        #: per region, the site of its sensor zone (None: every contact of the geom counts)
+        self.zones = list(zones) if zones is not None else [None] * len(region_geoms)
         names = [model.geom(g).name or "" for g in range(model.ngeom)]
         self.hand = np.array([0 if n.startswith("pro_") else 1 if n.startswith("hum_") else -1
                               for n in names])
@@ -223,9 +228,19 @@ class ContactAreas:
             depth = -c.dist
             for g in (g1, g2):
                 r = self.region_of[g]
-                if r >= 0 and depth > 0:
+                if r >= 0 and depth > 0 and self._in_zone(data, r, c.pos):
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
+
+    def _in_zone(self, data: mujoco.MjData, region: int, point) -> bool:
+        site = self.zones[region]
+        return True if site is None else _box_contains(data, self.model, site, point)
+
+
+def _box_contains(data: mujoco.MjData, model: mujoco.MjModel, site: int, point) -> bool:
+    """Whether ``point`` (world) lies inside the box site ``site``."""
+    local = data.site_xmat[site].reshape(3, 3).T @ (np.asarray(point) - data.site_xpos[site])
+    return bool(np.all(np.abs(local) <= model.site_size[site] + 1e-12))
 
 
 def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float]]:
@@ -260,7 +275,8 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     record_every = record_every or env.frame_skip
     obs, info = env.reset(seed=seed)
     m, d = env.model, env.data
-    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env))
+    zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
+    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
                                                 "acc")}
     steps, wall = 0, 0.0
