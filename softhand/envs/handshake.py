@@ -34,7 +34,7 @@ from softhand.hands import (
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
 from softhand.hands.constants import PARTNER
-from softhand.hands.skeleton import SENSOR_SLOTS
+from softhand.hands.skeleton import SENSOR_SLOTS, contact_sensor_force
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
@@ -187,7 +187,7 @@ class HandshakeEnv(gym.Env):
         # region readings: the normal forces in each region sensor's SENSOR_SLOTS slots of
         # (found, force xyz in the contact frame); slot 0's ``found`` counts every match
         adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id] for r in self.region_names])
-        self._sensor_idx = adr[:, None] + 4 * np.arange(SENSOR_SLOTS)[None, :] + 1
+        self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
         self._found_idx = adr
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
@@ -317,7 +317,8 @@ class HandshakeEnv(gym.Env):
         finally:
             opt.disableflags = flags
         self._step_index = end
-        self._forces = self._sensordata[self._sensor_idx].sum(axis=1)
+        self._forces = contact_sensor_force(
+            self._sensordata[self._sensor_idx].reshape(-1, SENSOR_SLOTS, 4))
         self._saturated = int((self._sensordata[self._found_idx] > SENSOR_SLOTS).sum())
         self._check_range()
         phase = script.timeline.phase(d.time)

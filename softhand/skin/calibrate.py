@@ -395,6 +395,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     law_s = time.perf_counter() - t0
     main = fit_curves[0]
     results: dict[str, RepresentationResult] = {}
+    fitted: dict[str, SoftContactParams] = {}  # parsed parameters, for the pair law
     for rep in representations:
         t0 = time.perf_counter()
         extra: dict[str, Any] = {}
@@ -407,6 +408,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
                 d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
             extra["fit_status"] = status.value
             params, kw = soft.to_dict(), {"soft": soft}
+            fitted["soft-contact"] = soft
             extra["closed_form_rms_pct_of_2N"] = 100 * rms_n / 2.0
             extra["closed_form"] = split_errors(soft.force(d[1:]), f[1:])
             at_2n = float(np.interp(REFERENCE_FORCE_N, f, d))
@@ -451,13 +453,13 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     if design != HUMAN and "soft-contact" in results:
         t0 = time.perf_counter()
         tissue = reference_law(HUMAN)
-        own = results["soft-contact"].params
+        own = fitted["soft-contact"]  # the skin's own soft contact, fitted above
         top = float(main.force_N.max())
         pair = fit_pair_law(law, tissue, skin_top_N=top,
                             skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
-                            initial=SoftContactParams.from_dict(own))
+                            initial=own)
         provenance["pair_law_fit_s"] = time.perf_counter() - t0
     return SkinCalibration(design, law, results, provenance, pair)
 
