@@ -1,7 +1,7 @@
 """Close the prosthetic hand with one signal: the open-loop controller in Handshake-v0.
 
 Run: ``python examples/handshake_open_loop.py [SPEED]``. Every digit closes at SPEED (fraction of
-the motors' maximum, default 0.6) for 0.35 s once the partner grips, holds, and opens when it lets
+the motors' maximum, default 0.6) for 0.8 s once the partner grips, holds, and opens when it lets
 go, as a myoelectric user does with one short "close" signal. Prints the peak force per region and which
 regions pass 2 N, with rigid shells and with the most lifelike skin side by side.
 """

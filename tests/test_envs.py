@@ -117,8 +117,8 @@ def test_hard_case_timesteps_half_to_two_milliseconds(timestep_s):
 def test_default_timestep_reproduces_half_a_millisecond(controller):
     """The 2 ms default against 0.5 ms, same partner and controller: every region's mean force
     within 0.35 N and the summed mean forces within 8 % (measured at seed 1 for the whole-hand
-    skin; the benchmark's worst of seeds 0-3, neutral / open-loop / force: 0.01 / 0.08 / 0.03 N and
-    +0.3 / +6.9 / -0.5 %; before the partner's joints had armature: 0.45 N, and sums off by -7 % to
+    skin; the benchmark's worst of seeds 0-3, neutral / open-loop / force: 0.02 / 0.12 / 0.01 N and
+    +0.3 / -5.5 / -0.4 %; before the partner's joints had armature: 0.45 N, and sums off by -7 % to
     -52 %)."""
     fine = run_handshake(controller=controller, seed=1, timestep_s=0.0005).table()
     coarse = run_handshake(controller=controller, seed=1).table()
@@ -208,6 +208,29 @@ def test_default_handshake_carries_every_newton_through_a_calibrated_law():
     assert acc["tissue_law_only_Ns"] == 0.0 and acc["no_law_Ns"] == 0.0  # no bare shell
     kin = run.kinematics()
     assert kin["partner_beyond_range_deg"]["max"] < 3.0, kin  # soft limits, 3 deg
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("controller", ["neutral", "open-loop", "force"])
+def test_bones_never_meet_with_any_shipped_skin_at_the_defaults(controller):
+    """Issue 11's requirement: with every shipped skin and each controller at its default
+    settings (seed 0), no bone-on-bone contact at any physics step (accounting at every 2 ms
+    step, not only at the 100 Hz frames). Measured: 0 N for all 14 skins x 3 controllers (before
+    the bones were inset by the skin thickness, the force controller pressed 30.7 N bone on
+    bone, a fingertip on the partner's little metacarpal head and the two little fingers in the
+    release)."""
+    import warnings
+
+    from softhand.envs.skins import CalibratedRangeWarning
+
+    peaks = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CalibratedRangeWarning)  # reported, not at issue here
+        for skin in SKIN_CHOICES:
+            acc = run_handshake(design=skin, controller=controller, seed=0,
+                                record_every=1).force_accounting()
+            peaks[skin] = acc["bone_on_bone_peak_N"]
+    assert all(v == 0.0 for v in peaks.values()), peaks
 
 
 def test_contact_beyond_the_calibrated_range_warns_once_per_pair():

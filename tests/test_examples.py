@@ -52,8 +52,8 @@ def test_handshake_force_regulating_example(capsys):
 
 def test_handshake_open_loop_example(capsys):
     """A short close command loads the hand where the partner's hand lies (the palm and the
-    thumb); skins change the peaks. (Closed for 0.35 s the fingers stop 19 deg in, short of the
-    partner's hand: README, Handshake.)"""
+    thumb); skins change the peaks. (Closed for 0.8 s the fingers reach 43 deg; index and middle
+    meet the partner's hand: README, Handshake.)"""
     out = _load("handshake_open_loop").main(0.6)
     for design in ("rigid", "pocket2-sil"):
         assert max(out[design][r] for r in ("Palm1", "Palm2", "Thumb1", "Thumb2")) > 2.0

@@ -43,11 +43,15 @@ def _thumb_to_handshake(info: dict) -> float:
 class OpenLoopClose:
     """Close at ``speed`` (fraction of the maximum) for ``close_s`` from the start of the grip,
     hold (the motors are not back-drivable), open afterwards; the thumb goes to its handshake
-    rotation. Open loop: the closure does not depend on the forces (the default closes each
-    digit by 0.6 x 0.35 s / 1 s = 21 % of its range beyond where it started)."""
+    rotation. Open loop: the closure does not depend on the forces. The default closes each
+    digit by 0.6 x 0.8 s / 1 s = 48 % of its range beyond where it started (43 deg at the MCP):
+    far enough for the index and middle fingers to wrap the partner's hand, as the force
+    controller's fingers do at 38-51 deg; a digit that meets the partner before then drives on
+    into it until the command stops (up to its stall torque), which is what an open loop does
+    (0.35 s, the earlier default, stopped every finger 19 deg in, short of the partner)."""
 
     speed: float = 0.6
-    close_s: float = 0.35
+    close_s: float = 0.8
 
     def __post_init__(self) -> None:
         if not 0 < self.speed <= 1:

@@ -1,7 +1,7 @@
 """Geometric checks of a compiled hand with trimesh: how deep each bone lies under the soft layer.
 
-``skin_cover_m`` samples points on the shaft of every bone capsule (its cylinder, the part away
-from the joints, where consecutive trimmed capsules pinch to a point) and measures, for each point,
+``skin_cover_m`` samples points on the whole surface of every bone capsule, caps included (or on
+its shaft only, ``end_m`` clear of its ends) and measures, for each point,
 how far it lies inside the union of the hand's soft geoms (skin or tissue), as the largest depth
 inside any one of them, the palm's pieces merged into the convex body they were cut from. Every
 such body is convex, so the depth of a point inside it is its smallest distance to the planes of
@@ -70,24 +70,33 @@ def _convex_groups(model: mujoco.MjModel, data: mujoco.MjData, soft: list[int]
 
 
 def _shaft_points(model: mujoco.MjModel, data: mujoco.MjData, geom: int, n_along: int,
-                  n_around: int, end_m: float) -> np.ndarray:
-    """Points on the cylinder of a capsule geom (world frame), ``end_m`` clear of its ends."""
+                  n_around: int, end_m: float | None) -> np.ndarray:
+    """Points on the cylinder of a capsule geom (world frame), ``end_m`` clear of its ends;
+    ``end_m=None``: the whole surface, its two hemispherical caps included."""
     radius, half = model.geom_size[geom][:2]
     rot = data.geom_xmat[geom].reshape(3, 3)
-    reach = max(half - end_m, 0.0)
+    reach = half if end_m is None else max(half - end_m, 0.0)
     z = np.linspace(-reach, reach, n_along)
     a = np.linspace(0.0, 2 * np.pi, n_around, endpoint=False)
     zz, aa = np.meshgrid(z, a)
     local = np.column_stack([radius * np.cos(aa.ravel()), radius * np.sin(aa.ravel()), zz.ravel()])
+    if end_m is None:
+        polar = np.linspace(0.0, 0.5 * np.pi, n_along // 2 + 1)[1:]  # off the equator, to the pole
+        pp, aa = np.meshgrid(polar, a)
+        ring = np.column_stack([radius * np.cos(pp.ravel()) * np.cos(aa.ravel()),
+                                radius * np.cos(pp.ravel()) * np.sin(aa.ravel()),
+                                radius * np.sin(pp.ravel())])
+        caps = [ring + [0.0, 0.0, half], ring * [1.0, 1.0, -1.0] - [0.0, 0.0, half]]
+        local = np.concatenate([local, *caps])
     return data.geom_xpos[geom] + local @ rot.T
 
 
 def skin_cover_m(model: mujoco.MjModel, data: mujoco.MjData, bones: list[int],
-                 soft: list[int], *, end_m: float = 0.0, n_along: int = 9,
+                 soft: list[int], *, end_m: float | None = None, n_along: int = 9,
                  n_around: int = 16) -> dict[str, float]:
-    """Thinnest soft cover (m) over each bone capsule's shaft, keyed by bone geom name (see the
-    module docstring), leaving out ``end_m`` at each end of the shaft (the joints, where the
-    envelope pinches); negative where part of a shaft lies outside every soft geom."""
+    """Thinnest soft cover (m) over each bone capsule, keyed by bone geom name (see the module
+    docstring): over its whole surface, caps included (``end_m=None``), or over its shaft leaving
+    out ``end_m`` at each end; negative where part of it lies outside every soft geom."""
     meshes = _convex_groups(model, data, soft)
     out = {}
     for bone in bones:

@@ -21,7 +21,12 @@ perpendicular to the adducted metacarpal, through the CMC: 0 is the adducted thu
 plane (pad facing the index), positive swings it palmar into opposition ([AAOS65] palmar abduction
 0-70 deg), carrying its flexion plane along, so flexing an opposed thumb moves its pad across the
 palm towards the fingers. Bones get the (contype, conaffinity) bits passed in, so that each hand's bones touch only
-the other hand's bones; they carry the segment masses (density x envelope volume).
+the other hand's bones; they carry the segment masses (density x envelope volume). Each bone is its
+segment's trimmed envelope capsule (softhand.hands.envelope) shrunk by the skin thickness: the same
+axis from R to L - R, radius R - skin, so it lies the skin thickness inside its own soft piece all
+over, ends included, and stops that far short of each joint (a finger metacarpal likewise stops
+bone radius + skin short of its CMC and MCP). Bones that ran joint to joint stood out of the
+soft layer at the joints, where the trimmed capsules pinch.
 """
 
 from __future__ import annotations
@@ -238,11 +243,13 @@ def add_skeleton(
     palm.add_site(name=f"{prefix}wrist_crease", type=_SPHERE, size=[0.002, 0, 0], group=4)
     for f in const.FINGERS:
         d = layout.digits[f]
+        axis = np.asarray(d.base_m, float) - np.asarray(d.cmc_m, float)
+        inset = (layout.metacarpal_bone_radius_m + skin) * axis / np.linalg.norm(axis)
         bone(
             palm,
             f"{f}_metacarpal",
-            d.cmc_m,
-            d.base_m,
+            np.asarray(d.cmc_m, float) + inset,
+            np.asarray(d.base_m, float) - inset,
             layout.metacarpal_bone_radius_m,
             layout.palm_mass_kg / len(const.FINGERS),
         )
@@ -257,8 +264,8 @@ def add_skeleton(
             (short,) = segment_joints(digit, seg)
             hinge(body, digit, short, (0.0, 1.0, 0.0))
             length, radius = d.lengths_m[seg], d.bone_radii_m[seg]
-            end = length - skin - radius if seg == "distal" else length
-            bone(body, f"{digit}_{seg}", (0, 0, 0), (end, 0, 0), radius, d.masses_kg[seg])
+            bone(body, f"{digit}_{seg}", (radius + skin, 0, 0), (length - radius - skin, 0, 0),
+                 radius, d.masses_kg[seg])
             pos = (length, 0.0, 0.0)
         body.add_site(name=f"{prefix}{digit}_tip", type=_SPHERE, size=[0.002, 0, 0],
                       pos=[float(pos[0]), 0.0, 0.0], group=4)
@@ -284,12 +291,13 @@ def add_skeleton(
     bodies["thumb_metacarpal"] = body
     hinge(body, "thumb", "rot", rot_axis)
     hinge(body, "thumb", "cmc", (0.0, 1.0, 0.0))
+    radius = d.bone_radii_m["metacarpal"]
     bone(
         body,
         "thumb_metacarpal",
-        (0, 0, 0),
-        (d.lengths_m["metacarpal"], 0, 0),
-        d.bone_radii_m["metacarpal"],
+        (radius + skin, 0, 0),
+        (d.lengths_m["metacarpal"] - radius - skin, 0, 0),
+        radius,
         d.masses_kg["metacarpal"],
     )
     chain(body, "thumb", (d.lengths_m["metacarpal"], 0.0, 0.0), ("proximal", "distal"))
