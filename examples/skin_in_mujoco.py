@@ -25,10 +25,9 @@ def main(skin: str = "pocket2-sil") -> dict[str, dict[str, float]]:
     rows = {"FE": {"F_1mm": float(np.interp(1.0, curve.displacement_mm[ramp], curve.force_N[ramp])),
                    "F_2mm": float(np.interp(2.0, curve.displacement_mm[ramp], curve.force_N[ramp])),
                    "F_end": float(curve.force_N[-1])}}
-    for rep, kw in (("rigid", {}), ("soft-contact", {"soft": cal.soft_contact}),
-                    ("soft-contact+relaxation", {"pad": cal.pad})):
-        out = run_rig(build_rig(rep, settings=settings, **kw), curve.time_s, curve.displacement_mm,
-                      settings=settings)
+    for rep in ("rigid", "soft-contact", "soft-contact+relaxation"):
+        out = run_rig(build_rig(rep, cal.params(rep), settings=settings), curve.time_s,
+                      curve.displacement_mm, settings=settings)
         up = out.time_s <= curve.time_s[curve.peak_index]
         rows[rep] = {"F_1mm": float(np.interp(1.0, out.displacement_mm[up], out.force_N[up])),
                      "F_2mm": float(np.interp(2.0, out.displacement_mm[up], out.force_N[up])),

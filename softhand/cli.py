@@ -291,7 +291,7 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
 def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) -> None:
     """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
     from softhand.skin.calibrate import fe_curves, skin_names
-    from softhand.skin.rig import REPRESENTATIONS
+    from softhand.skin.representations import REPRESENTATIONS
     from softhand.skin.run import calibrate_many, summary_table
 
     known = skin_names()
@@ -299,7 +299,7 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     for n in names:
         if n not in known:
             bad(f"skin {n!r} is unknown; allowed: {', '.join(known)}")
-    reps = tuple(dict.fromkeys(representations)) or REPRESENTATIONS
+    reps = tuple(dict.fromkeys(representations)) or tuple(REPRESENTATIONS)
     for r in reps:
         if r not in REPRESENTATIONS:
             bad(f"--representation {r!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")

@@ -14,10 +14,11 @@ import pytest
 from softhand.laws import Curve, ElasticLaw, Prony, SkinLaw, fit_skin_law, load_curve, qlv_force
 from softhand.laws.elastic import knot_vector
 from softhand.laws.fit import FitStatus, split_errors
-from softhand.skin.calibrate import CALIBRATION_MASS_KG, SkinCalibration, _ramp, calibrate_design
+from softhand.skin.calibrate import CALIBRATION_MASS_KG, SkinCalibration, calibrate_design
 from softhand.skin.files import load_calibration, save_calibration
 from softhand.skin.finger import POSTURES_DEG, press_finger
 from softhand.skin.pad import PadParams, evaluate_pieces, spline_pieces
+from softhand.skin.representations import loading_ramp
 from softhand.skin.rig import BONE_DEPTH_M, RigSettings, SkinRangeWarning, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
@@ -32,14 +33,14 @@ def pocket_pu() -> Curve:
 
 @pytest.fixture(scope="module")
 def pocket_soft(pocket_pu) -> SoftContactParams:
-    _, d, f = _ramp(pocket_pu)
+    _, d, f = loading_ramp(pocket_pu)
     return fit_soft_contact(d, f, reference_mass_kg=0.01 * CALIBRATION_MASS_KG)[0]
 
 
 def _rest_force(params: SoftContactParams, mass: float, load: float) -> tuple[float, float]:
     """Penetration (mm) and contact force (N) of a mass resting on the skin under ``load``."""
     st = RigSettings(mass_kg=mass, load_cell_hz=0.0)
-    model = build_rig("soft-contact", soft=params, settings=st)
+    model = build_rig("soft-contact", params, settings=st)
     model.dof_damping[0] = 2 * np.sqrt(2000.0 * mass)  # settle a dead weight (~critical)
     data = mujoco.MjData(model)
     for k in range(8000):
@@ -71,7 +72,7 @@ def test_shipped_soft_contact_follows_every_fe_loading_curve_to_20_newtons_withi
     (README: up to 4.5 % of 2 N below 2 N). Refitting is covered by the calibration test."""
     worst_low = worst_high = 0.0
     for path in sorted(FE.glob("*.csv")):
-        _, d, f = _ramp(load_curve(path))
+        _, d, f = loading_ramp(load_curve(path))
         params = load_calibration(path.stem).soft_contact
         err = split_errors(params.force(d[1:]), f[1:])
         worst_low = max(worst_low, err["rms_pct_of_2N_to_2N"])
@@ -105,11 +106,11 @@ def test_pair_law_is_skin_and_tissue_in_series_over_the_whole_range():
 
 
 def test_soft_contact_in_the_rig_is_mass_independent(pocket_pu, pocket_soft):
-    t, d, f = _ramp(pocket_pu)
+    t, d, f = loading_ramp(pocket_pu)
     curves = {}
     for factor in (0.01, 1.0, 100.0):
         st = RigSettings(mass_kg=CALIBRATION_MASS_KG * factor)
-        out = run_rig(build_rig("soft-contact", soft=pocket_soft, settings=st), t, d, settings=st)
+        out = run_rig(build_rig("soft-contact", pocket_soft, settings=st), t, d, settings=st)
         curves[factor] = out
         err = split_errors(out.force_N[1:], np.interp(out.displacement_mm[1:], d, f))
         assert err["rms_pct_of_2N_to_2N"] < 5.0  # of the FE, 0-2 N (the 0-20 N fit's accuracy)
@@ -126,11 +127,11 @@ def test_soft_contact_in_the_rig_is_the_same_law_at_every_supported_timestep(poc
                                                                               timestep):
     """The handshake runs at 2 ms: the loading curve there (and at 0.5 ms) is the 1 ms curve
     within 0.1 % of 2 N (measured: identical to 0.01 %)."""
-    t, d, _ = _ramp(pocket_pu)
+    t, d, _ = loading_ramp(pocket_pu)
     ref_st, st = RigSettings(), RigSettings(timestep=timestep)
-    ref = run_rig(build_rig("soft-contact", soft=pocket_soft, settings=ref_st), t, d,
+    ref = run_rig(build_rig("soft-contact", pocket_soft, settings=ref_st), t, d,
                   settings=ref_st)
-    out = run_rig(build_rig("soft-contact", soft=pocket_soft, settings=st), t, d, settings=st)
+    out = run_rig(build_rig("soft-contact", pocket_soft, settings=st), t, d, settings=st)
     other = np.interp(ref.displacement_mm, out.displacement_mm, out.force_N)
     on = ref.displacement_mm > 0.05
     assert 100 * np.sqrt(np.mean((other[on] - ref.force_N[on]) ** 2)) / 2 < 0.1
@@ -162,7 +163,7 @@ def test_relaxation_pad_reproduces_a_known_qlv_law_in_the_rig():
     f = law.force(t, d)
     pad = PadParams(law, depth, 300 * 3.0e3, 3 * law.elastic.max_mm)
     st = RigSettings()
-    out = run_rig(build_rig("soft-contact+relaxation", pad=pad, settings=st), t, d, settings=st)
+    out = run_rig(build_rig("soft-contact+relaxation", pad, settings=st), t, d, settings=st)
     err = out.force_N - np.interp(out.time_s, t, f)
     assert 100 * np.sqrt(np.mean(err**2)) / 2 < 1.0
     hold = out.time_s > depth / 0.5
@@ -188,12 +189,12 @@ def test_calibrate_design_meets_the_issue_targets_on_a_pocket_design(pocket_pu):
 @pytest.mark.parametrize("rep", ["soft-contact", "soft-contact+relaxation"])
 def test_impact_and_overload_stay_bounded(pocket_pu, pocket_soft, rep, timestep):
     law = fit_skin_law("pocket2-pu", [pocket_pu])
-    kw = {"soft": pocket_soft} if rep == "soft-contact" else {
-        "pad": PadParams(law, law.elastic.displacement_at(2.0), 300 * 6e3, 3 * law.elastic.max_mm)}
+    params = pocket_soft if rep == "soft-contact" else PadParams(
+        law, law.elastic.displacement_at(2.0), 300 * 6e3, 3 * law.elastic.max_mm)
     st = RigSettings(timestep=timestep, mass_kg=CALIBRATION_MASS_KG, load_cell_hz=0.0)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = build_rig(rep, settings=st, **kw)
+        model = build_rig(rep, params, settings=st)
     outside = any(issubclass(w.category, SkinRangeWarning) for w in caught)
     assert outside == (timestep > 2e-3)  # 5 ms is outside the calibrated range: said so
     data = mujoco.MjData(model)

@@ -54,9 +54,7 @@ def run_calibration_benchmark(out_dir: str | Path = REPORTS_DIR, *, skins: list[
             if rep == "flex":
                 row[rep] = _flex_row(cal.representations[rep].params, curve)
                 continue
-            kw = {"soft": cal.soft_contact} if rep == "soft-contact" else (
-                {"pad": cal.pad} if rep == "soft-contact+relaxation" else {})
-            model = build_rig(rep, settings=settings, **kw)
+            model = build_rig(rep, cal.params(rep), settings=settings)
             outs = [run_rig(model, curve.time_s, curve.displacement_mm, settings=settings)
                     for _ in range(REPEATS)]
             best = min(outs, key=lambda o: o.step_us)

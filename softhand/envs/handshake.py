@@ -111,10 +111,28 @@ class HandshakeEnv(gym.Env):
     ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
 
+    Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
+    region, ``skins`` values ``DESIGN@REPRESENTATION`` for one):
+
+    * ``soft-contact`` (default): each pair carries the skin's law in series with the tissue's in
+      its solref/solimp (no memory: the 0.5 mm/s loading curve);
+    * ``soft-contact+relaxation``: each skin geom rides a relaxation pad (a slide joint along its
+      outward normal, the QLV law's spline spring and Maxwell branches, joint armature 10 g,
+      :class:`~softhand.skin.representations.HandPad`), its pairs carry the tissue's law alone;
+      the region forces relax as the skin's Prony terms say (polyurethane skins lose about 40 %
+      of the force in a hold). Runs under the scene's ``implicitfast`` integrator at 0.5-2 ms.
+      The pad compresses along its normal only: a contact on the side of a phalanx meets the
+      tissue's law alone. Costlier: 2 Prony terms x 3 branch knots + 1 dofs per skin geom;
+    * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
+
+    ``flex`` is rig-only (it is calibrated on a block, not on a hand's capsules).
+
     Args:
         design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or
             ``rigid``; default: the most lifelike design).
-        skins: region -> skin overrides.
+        skins: region -> skin overrides, ``DESIGN`` or ``DESIGN@REPRESENTATION``.
+        representation: representation of every region (default ``soft-contact``; allowed:
+            ``HAND_REPRESENTATIONS``).
         frame_skip: physics steps per action, an integer >= 1 with frame_skip x timestep_s <=
             0.1 s (actions at 10 Hz or faster); default: actions at 100 Hz
             (``ACTION_PERIOD_S / timestep_s``, 5 steps of 2 ms).
@@ -141,8 +159,8 @@ class HandshakeEnv(gym.Env):
     metadata: ClassVar[dict] = {"render_modes": [], "render_fps": 100}
 
     def __init__(self, *, design: str | None = None, skins: Mapping[str, str] | None = None,
-                 frame_skip: int | None = None, timestep_s: float = DEFAULT_TIMESTEP_S,
-                 squeeze: float = 1.0,
+                 representation: str | None = None, frame_skip: int | None = None,
+                 timestep_s: float = DEFAULT_TIMESTEP_S, squeeze: float = 1.0,
                  overload_N: float = 10.0, reward_weights: Mapping[str, float] | None = None,
                  calibration_dir: str | Path | None = None, randomize: bool = True) -> None:
         # every argument (and every calibration file used) is checked before any work is done
@@ -166,7 +184,7 @@ class HandshakeEnv(gym.Env):
         if not isinstance(randomize, (bool, np.bool_)):
             raise ValueError(f"randomize = {show(randomize)}: expected True or False")
         self.weights = weights
-        self.skins = parse_skins(design, skins)
+        self.skins, self.representations = parse_skins(design, skins, representation)
         self.frame_skip = int(frame_skip)
         self.randomize = bool(randomize)
         directory = calibration_dir or SKINS_DIR
@@ -176,7 +194,8 @@ class HandshakeEnv(gym.Env):
         # the laws are written into the spec, and the model is compiled from the spec's MJCF text,
         # so that models/mjcf/handshake_scene.xml is exactly the simulated model (the XML writer
         # rounds numbers: a model compiled from the spec itself differs in the last digits)
-        spec = skinned_scene_spec(self.skins, self.config, directory=directory)
+        spec = skinned_scene_spec(self.skins, self.config, representations=self.representations,
+                                  directory=directory)
         spec.compile()
         self.model = mujoco.MjModel.from_xml_string(spec.to_xml())
         self.data = mujoco.MjData(self.model)

@@ -40,6 +40,15 @@ class HandshakeRun:
     region_area_mm2: np.ndarray | None = None
     rigid_force_N: np.ndarray | None = None
     accounting: np.ndarray | None = None  # per frame: ContactAreas.accounting
+    #: per frame and region: normal force (N) of all the contacts of the region's skin geom
+    #: (its sensor zone and the rest), ContactAreas.skin_force
+    skin_force_N: np.ndarray | None = None
+    #: per frame and region: compression (mm) of the region's relaxation pad (NaN: no pad)
+    pad_compression_mm: np.ndarray | None = None
+    #: per frame and region: the pad's own force (N), its spline spring and Maxwell branches
+    pad_force_N: np.ndarray | None = None
+    representations: dict[str, str] = field(default_factory=dict)
+    calibration_dir: str = ""
 
     def force_accounting(self) -> dict[str, float]:
         """Where the normal force between the hands came from, over the recorded frames.
@@ -104,6 +113,51 @@ class HandshakeRun:
         out["partner_beyond_range_deg"] = {"max": worst[0], "joint": worst[1]}
         return out
 
+    def relaxation(self, *, min_held_N: float = 0.5) -> dict[str, dict[str, float]]:
+        """How the relaxation pads followed the skin's QLV law while the partner held the grip.
+
+        For each region on a relaxation pad whose skin carried more than ``min_held_N`` during
+        the grip and shake (the hold), with x(t) the pad's compression (the skin's indentation)
+        and F_QLV(x) the skin's QLV law (:meth:`softhand.laws.fit.SkinLaw.force`) over the whole
+        history x(t), each the largest error over the hold in % of the largest held force
+        ``held_N`` of the region's skin (all its contacts):
+
+        * ``pad_error_pct``: the pad's own force (spring + branches) against F_QLV(x): how well the
+          pad's mechanics follow QLV;
+        * ``qlv_error_pct``: the normal force of the skin's contacts against F_QLV(x): what the
+          region's reading makes of it (a contact from the side loads the normal force but
+          hardly compresses a pad that slides along the skin's normal);
+        * ``soft_contact_error_pct``: the skin's memoryless soft contact (its rest law, fitted
+          to the 0.5 mm/s loading curve) at the same x(t) against F_QLV(x): the error a skin
+          without relaxation makes on this history.
+        """
+        if self.pad_compression_mm is None or self.skin_force_N is None:
+            return {}
+        from softhand.skin.files import load_calibration
+
+        hold = np.array([p in ("grip", "shake") for p in self.phase])
+        out = {}
+        for i, region in enumerate(self.region_names):
+            x = self.pad_compression_mm[:, i]
+            if not np.isfinite(x).all() or not hold.any():
+                continue
+            f = self.skin_force_N[:, i]
+            held = float(f[hold].max())
+            if held < min_held_N:
+                continue
+            cal = load_calibration(self.skins[region], self.calibration_dir)
+            depth = np.maximum(x, 0.0)
+            qlv = cal.law.force(self.time_s - self.time_s[0], depth)
+
+            def worst(v: np.ndarray, qlv=qlv, held=held) -> float:
+                return float(100 * np.abs(v - qlv)[hold].max() / held)
+
+            out[region] = {"held_N": held, "max_compression_mm": float(depth[hold].max()),
+                           "pad_error_pct": worst(self.pad_force_N[:, i]),
+                           "qlv_error_pct": worst(f),
+                           "soft_contact_error_pct": worst(cal.soft_contact.force(depth))}
+        return out
+
     def table(self) -> dict[str, dict[str, float]]:
         """Per region: peak and mean force (N) and contact area (mm^2) over the handshake."""
         f = self.region_force_N
@@ -125,12 +179,18 @@ class HandshakeRun:
     def summary(self) -> dict:
         sim = float(self.time_s[-1])
         rigid = self.rigid_force_N if self.rigid_force_N is not None else np.zeros(1)
-        return {"regions": self.table(), "over_2N": self.over_2n,
+        out = {"regions": self.table(), "over_2N": self.over_2n,
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
                 "rigid_contact_peak_N": float(rigid.max()),
                 "force_accounting": self.force_accounting(),
                 "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
+        if self.representations:
+            out["representations"] = dict(self.representations)
+        relax = self.relaxation()
+        if relax:
+            out["relaxation"] = relax
+        return out
 
 
 def mean_curvature_radius(model: mujoco.MjModel, geom: int) -> float:
@@ -193,6 +253,8 @@ class ContactAreas:
         self.bone = np.array(["bone_" in (model.geom(g).name or "") for g in range(model.ngeom)])
         self.model = model
         self.n_regions = len(region_geoms)
+        #: after each call: per region, normal force (N) of all its skin geom's contacts
+        self.skin_force = np.zeros(self.n_regions)
         self._force = np.zeros(6)
 
     def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float, np.ndarray]:
@@ -203,6 +265,7 @@ class ContactAreas:
         rows = []
         acc = self.accounting
         acc[:] = 0.0
+        self.skin_force[:] = 0.0
         n = len(ACCOUNT_CLASSES)
         for i in range(data.ncon):
             c = data.contact[i]
@@ -225,6 +288,9 @@ class ContactAreas:
             if self.bone[g1] and self.bone[g2]:
                 rigid += f
                 continue
+            for g in (g1, g2):
+                if self.region_of[g] >= 0:
+                    self.skin_force[self.region_of[g]] += f
             depth = -c.dist
             for g in (g1, g2):
                 r = self.region_of[g]
@@ -278,7 +344,12 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc")}
+                                                "acc", "sf", "pf")}
+    pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
+                  for g in env.region_geoms]
+    pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
+    pad_dofs = np.array([m.jnt_dofadr[j] if j >= 0 else 0 for j in pad_joints])
+    has_pads = bool((pads >= 0).any())
     steps, wall = 0, 0.0
     while True:
         t0 = time.perf_counter()
@@ -297,11 +368,22 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["a"].append(area)
             frames["r"].append(rigid)
             frames["acc"].append(areas.accounting.copy())
+            if has_pads:  # the pads' force at this frame's state (mj_step leaves the forces
+                # of the state it started from), so that compression and force go together
+                mujoco.mj_forward(m, d)
+                areas(d)
+            frames["sf"].append(areas.skin_force.copy())
+            frames["pf"].append(-d.qfrc_passive[pad_dofs])  # the pad's push on its skin
         if term or trunc:
             break
     if term:
         raise FloatingPointError(f"the handshake became unstable at t = {d.time:.3f} s")
-    return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]),
-                        np.array(frames["q"]), np.array(frames["mp"]), np.array(frames["mq"]),
-                        np.array(frames["f"]), frames["c"], frames["ph"], wall, steps, m,
-                        np.array(frames["a"]), np.array(frames["r"]), np.array(frames["acc"]))
+    q = np.array(frames["q"])
+    compression = np.where(pads >= 0, 1e3 * q[:, np.maximum(pads, 0)], np.nan)
+    return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]), q,
+                        np.array(frames["mp"]), np.array(frames["mq"]), np.array(frames["f"]),
+                        frames["c"], frames["ph"], wall, steps, m, np.array(frames["a"]),
+                        np.array(frames["r"]), np.array(frames["acc"]), np.array(frames["sf"]),
+                        compression if has_pads else None,
+                        np.array(frames["pf"]) if has_pads else None,
+                        dict(env.representations), env.calibration_dir)

@@ -26,10 +26,17 @@ from softhand.hands.prosthetic import UNSENSED_SKINS, paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
 from softhand.skin.files import SKINS_DIR, load_calibration
+from softhand.skin.representations import (
+    REPRESENTATIONS,
+    HandPad,
+    Representation,
+    get_representation,
+)
 from softhand.skin.rig import pair_law_values
 from softhand.skin.soft_contact import SoftContactParams
 
-__all__ = ["DEFAULT_DESIGN", "SKIN_CHOICES", "CalibratedRangeWarning", "add_skin_pairs", "calibrated_max_force",
+__all__ = ["DEFAULT_DESIGN", "DEFAULT_REPRESENTATION", "HAND_REPRESENTATIONS", "OUTWARD",
+           "SKIN_CHOICES", "CalibratedRangeWarning", "add_skin_pairs", "calibrated_max_force",
            "parse_skins", "series_law", "skin_of_pair", "write_skin_laws"]
 
 class CalibratedRangeWarning(UserWarning):
@@ -38,29 +45,63 @@ class CalibratedRangeWarning(UserWarning):
 
 
 DEFAULT_DESIGN = "pocket2-sil"  # the most lifelike design (calibration/skins/index.json ranking)
+DEFAULT_REPRESENTATION = "soft-contact"
+#: the representations a hand takes (softhand.skin.representations: flex is rig-only)
+HAND_REPRESENTATIONS = tuple(n for n, r in REPRESENTATIONS.items() if r.not_on_hand is None)
+#: outward normal of each prosthetic skin geom's contact side in its body's frame: palmar (-z)
+#: for the phalanges, the palm and the thenar, dorsal (+z) for the back of the hand
+OUTWARD = {"Back1": (0.0, 0.0, 1.0), "Back2": (0.0, 0.0, 1.0)}
+PALMAR = (0.0, 0.0, -1.0)
 SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
 
 
-def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None = None
-                ) -> dict[str, str]:
-    """Region -> skin: ``design`` everywhere (default the most lifelike), then ``overrides``.
+def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None = None,
+                representation: str | None = None) -> tuple[dict[str, str], dict[str, str]]:
+    """Region -> skin design and region -> representation: ``design`` (default the most
+    lifelike) in ``representation`` (default ``soft-contact``) everywhere, then ``overrides``,
+    each ``DESIGN`` or ``DESIGN@REPRESENTATION``.
+
+    A ``rigid`` region (the design, or any design ``@rigid``) is MuJoCo's stock contact against
+    the tissue: its design is ``rigid`` and its representation ``rigid``.
 
     Raises:
-        ValueError: an unknown region or skin, naming it and the allowed values.
+        ValueError: an unknown region, skin or representation, or one the hand does not take,
+            naming it and the allowed values.
     """
     names = paper_regions()
+    rep = _hand_representation(representation or DEFAULT_REPRESENTATION, "representation")
     design = design or DEFAULT_DESIGN
     if design not in SKIN_CHOICES:
         raise ValueError(f"skin design {design!r} is unknown; allowed: {', '.join(SKIN_CHOICES)}")
-    out = dict.fromkeys(names, design)
-    for region, skin in (overrides or {}).items():
-        if region not in out:
+    designs, reps = dict.fromkeys(names, design), dict.fromkeys(names, rep)
+    for region, choice in (overrides or {}).items():
+        if region not in designs:
             raise ValueError(f"region {region!r} is unknown; allowed: {', '.join(names)}")
+        skin, _, own = str(choice).partition("@")
         if skin not in SKIN_CHOICES:
             raise ValueError(f"skin {skin!r} for region {region} is unknown; allowed: "
                              f"{', '.join(SKIN_CHOICES)}")
-        out[region] = skin
-    return out
+        designs[region] = skin
+        if own:
+            reps[region] = _hand_representation(own, f"representation for region {region}")
+    for region in names:
+        if designs[region] == "rigid" and reps[region] not in ("rigid", rep) and \
+                "@" in str((overrides or {}).get(region, "")):
+            raise ValueError(f"skin 'rigid' for region {region} has only the rigid "
+                             f"representation, not {reps[region]!r}")
+        if designs[region] == "rigid" or reps[region] == "rigid":
+            designs[region] = reps[region] = "rigid"
+    return designs, reps
+
+
+def _hand_representation(name: str, what: str) -> str:
+    if name not in REPRESENTATIONS:
+        raise ValueError(f"{what} {name!r} is unknown; allowed: {', '.join(HAND_REPRESENTATIONS)}")
+    why = get_representation(name).not_on_hand
+    if why:
+        raise ValueError(f"{what} {name!r} is not available on the hand ({why}); allowed: "
+                         f"{', '.join(HAND_REPRESENTATIONS)}")
+    return name
 
 
 def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_") -> list[str]:
@@ -125,22 +166,45 @@ def calibrated_max_force(skin: str, directory: str = str(SKINS_DIR)) -> float:
     return float(_calibration(skin, directory).pair_law.calibrated_max_N)
 
 
-def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str], *,
-                    directory: str | Path = SKINS_DIR, pro: str = "pro_") -> list[str]:
-    """Add the skin pairs (:func:`add_skin_pairs`) to ``spec`` with each region's pair law in
-    their ``solref``/``solimp`` (a non-sensing skin: its region's design).
+def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
+                    representations: Mapping[str, str] | None = None, *,
+                    directory: str | Path = SKINS_DIR, pro: str = "pro_",
+                    hand_pad: HandPad | None = None) -> list[str]:
+    """Put each region's skin on the hand and add the skin pairs (:func:`add_skin_pairs`) with
+    their laws in ``solref``/``solimp`` (a non-sensing skin: its region's design and
+    representation; default representation ``soft-contact``).
 
-    The laws are written into the spec before the caller compiles it, so the MJCF of the spec
+    Each representation goes through its class (:mod:`softhand.skin.representations`):
+    ``soft-contact`` leaves the geom as it is and gives its pairs the skin-and-tissue pair law;
+    ``soft-contact+relaxation`` moves the geom onto a relaxation pad along its outward normal
+    (:data:`OUTWARD`) and gives its pairs the tissue's law alone; ``rigid``: the tissue's law.
+    Everything is written into the spec before the caller compiles it, so the MJCF of the spec
     (``spec.to_xml()``, ``models/mjcf/handshake_scene.xml``) is the simulated model. The pair's
     inverse inertia that scales each law is read from one compile of the spec with the pairs.
 
     Returns:
         The pair names.
     """
+    reps = dict(representations or {})
+    hand_pad = hand_pad or HandPad()
+    tissue = series_law("rigid", str(directory))
+    keys = [*skins, *UNSENSED_SKINS]
+    for key in keys:
+        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
+        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
+        design = skins.get(region, "rigid")
+        if type(rep).add_to_hand is Representation.add_to_hand or design == "rigid":
+            continue
+        geom = f"{pro}skin_{key}"
+        rep.add_to_hand(spec, geom, _calibration(design, str(directory)).params(rep.name),
+                        outward=OUTWARD.get(key, PALMAR), hand_pad=hand_pad)
     names = add_skin_pairs(spec, pro=pro)
     model = spec.compile()
     for name in names:
-        _, skin = skin_of_pair(name, skins)
+        key, skin = skin_of_pair(name, skins)
+        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
+        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
+        law = rep.hand_pair_law(series_law(skin, str(directory)), tissue)
         pair = spec.pair(name)
-        pair.solref, pair.solimp = pair_law_values(model, name, series_law(skin, str(directory)))
+        pair.solref, pair.solimp = pair_law_values(model, name, law)
     return names

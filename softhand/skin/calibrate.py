@@ -47,13 +47,15 @@ from softhand.laws.fit import (
 from softhand.laws.references import DATA_MAX_N, HUMAN, TABLE_MAX_N, reference_law
 from softhand.skin.pad import PadParams
 from softhand.skin.pair import PairLaw, fit_pair_law
+from softhand.skin.representations import REPRESENTATIONS, get_representation, loading_ramp
 from softhand.skin.rig import RigSettings, build_rig, run_rig
-from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
-from softhand.validate import check_mapping, check_number, check_numbers, join, show
+from softhand.skin.soft_contact import SoftContactParams
+from softhand.validate import check_mapping, check_number, join, show
 
 __all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
-           "calibrate_design", "calibrate_skin", "fe_curves", "hold_error", "law_curve",
-           "loading_error", "skin_names", "social_touch_record"]
+           "calibrate_design", "calibrate_skin", "fe_curves", "fit_pad", "hold_error",
+           "law_curve", "loading_error", "posture_sensitivity", "skin_names",
+           "social_touch_record"]
 
 FORMAT_VERSION = 2  # 2: FE curves and laws to 20 N, split errors, the pair law against tissue
 CALIBRATION_MASS_KG = 0.2  # a hand segment; the mass tests use 0.01x (2 g) and 100x (20 kg)
@@ -141,21 +143,24 @@ class SkinCalibration:
                              f"(calibrated: {have}); run `softhand calibrate {self.design}`")
         return self.representations[name]
 
+    def params(self, representation: str) -> Any:
+        """The parsed parameters of a calibrated representation (ValueError naming the skin if
+        it is not calibrated)."""
+        if representation not in self._parsed:
+            r = self._representation(representation)
+            self._parsed[representation] = get_representation(representation).parse(
+                r.params, self.law)
+        return self._parsed[representation]
+
     @property
     def soft_contact(self) -> SoftContactParams:
-        """The ``soft-contact`` parameters (ValueError naming the skin if not calibrated)."""
-        if "soft-contact" not in self._parsed:
-            params = self._representation("soft-contact").params
-            self._parsed["soft-contact"] = SoftContactParams.from_dict(params)
-        return self._parsed["soft-contact"]
+        """The ``soft-contact`` parameters."""
+        return self.params("soft-contact")
 
     @property
     def pad(self) -> PadParams:
-        """The ``soft-contact+relaxation`` pad (ValueError naming the skin if not calibrated)."""
-        if "soft-contact+relaxation" not in self._parsed:
-            params = self._representation("soft-contact+relaxation").params
-            self._parsed["soft-contact+relaxation"] = PadParams.from_dict(params, self.law)
-        return self._parsed["soft-contact+relaxation"]
+        """The ``soft-contact+relaxation`` pad of the rig."""
+        return self.params("soft-contact+relaxation")
 
     def to_dict(self) -> dict:
         out = {"format_version": FORMAT_VERSION, "design": self.design,
@@ -195,7 +200,7 @@ class SkinCalibration:
                 raise ValueError(f"design = {show(d['design'])}: expected {want}")
             law = SkinLaw.from_dict(d["law"], key="law")
             reps_in = check_mapping("representations", d["representations"],
-                                    optional=REPRESENTATIONS)
+                                    optional=tuple(REPRESENTATIONS))
             for rep in require:
                 if rep not in reps_in:
                     raise ValueError(f"representations.{rep}: missing (needed here; calibrated: "
@@ -214,7 +219,6 @@ class SkinCalibration:
             raise ValueError(f"{source}: skin {name}: {exc}") from None
 
 
-REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
 _RESULT_NUMBERS = ("rms_error_pct_of_2N", "max_error_pct_of_2N", "step_us", "fit_s")
 _RESULT_OPTIONAL = ("mass_sensitivity_pct", "relaxation_error_pct")
 
@@ -232,46 +236,13 @@ def _parse_representation(rep: str, r: Any, law: SkinLaw, key: str
                 for k in _RESULT_OPTIONAL}
     pkey = join(key, "params")
     params = check_mapping(pkey, r["params"], optional=None)
-    value: Any = None
-    if rep == "soft-contact":
-        value = SoftContactParams.from_dict(params, key=pkey)
-    elif rep == "soft-contact+relaxation":
-        value = PadParams.from_dict(params, law, key=pkey)
-    elif rep == "rigid":
-        check_mapping(pkey, params, required=("solref", "solimp"))
-        check_numbers(join(pkey, "solref"), params["solref"], length=2)
-        check_numbers(join(pkey, "solimp"), params["solimp"], length=5)
-    else:  # flex
-        from dataclasses import fields
-
-        from softhand.skin.flex import FlexPadParams
-
-        check_mapping(pkey, params, optional=[f.name for f in fields(FlexPadParams)])
-        for k, v in params.items():
-            if k != "material":
-                check_number(join(pkey, k), v)
-        try:
-            value = FlexPadParams(**params)
-        except ValueError as exc:
-            raise ValueError(f"{pkey}: {exc}") from None
+    value = get_representation(rep).parse(params, law, key=pkey)
     extra = {k: v for k, v in r.items() if k not in names}
     result = RepresentationResult(rep, dict(params), numbers["rms_error_pct_of_2N"],
                                   numbers["max_error_pct_of_2N"], optional["mass_sensitivity_pct"],
                                   optional["relaxation_error_pct"], numbers["step_us"],
                                   numbers["fit_s"], extra)
-    return result, value if rep != "flex" else None
-
-
-def _ramp(curve: Curve, top_N: float | None = None
-          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The loading ramp of ``curve`` (time, indentation, force), up to ``top_N`` if given."""
-    i = curve.peak_index
-    t, d, f = curve.time_s[:i + 1], curve.displacement_mm[:i + 1], curve.force_N[:i + 1]
-    if top_N is not None:
-        keep = f <= top_N
-        keep[:2] = True
-        t, d, f = t[keep], d[keep], f[keep]
-    return t, d, f
+    return result, value
 
 
 def loading_error(out, curve: Curve, *, split: bool = False):
@@ -279,7 +250,7 @@ def loading_error(out, curve: Curve, *, split: bool = False):
     ``split``, also :func:`softhand.laws.fit.split_errors` (up to 2 N / above 2 N) as a dict."""
     t_end = curve.time_s[curve.peak_index]
     ramp = out.time_s <= t_end + 1e-12
-    _, d, f = _ramp(curve)
+    _, d, f = loading_ramp(curve)
     target = np.interp(out.displacement_mm[ramp], d, f)
     err = out.force_N[ramp] - target
     rms, mx = float(100 * np.sqrt(np.mean(err**2)) / 2.0), float(100 * np.abs(err).max() / 2.0)
@@ -297,14 +268,15 @@ def hold_error(out, curve: Curve) -> float | None:
     return float(100 * np.abs(err).max() / curve.force_N[curve.peak_index])
 
 
-def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings, **params) -> float:
+def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings,
+                      params: Any) -> float:
     """Largest RMS difference (% of 2 N) of the loading curve when the mass changes 100x."""
-    t, d, _ = _ramp(curve)
+    t, d, _ = loading_ramp(curve)
     runs = {}
     for factor in (1.0, *MASS_FACTORS):
         st = RigSettings(timestep=settings.timestep, mass_kg=settings.mass_kg * factor,
                          integrator=settings.integrator)
-        out = run_rig(build_rig(representation, settings=st, **params), t, d, settings=st)
+        out = run_rig(build_rig(representation, params, settings=st), t, d, settings=st)
         runs[factor] = out
     ref = runs[1.0]
     worst = 0.0
@@ -314,7 +286,7 @@ def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings, 
     return worst
 
 
-def _posture_sensitivity(soft: SoftContactParams, depth_mm: float) -> float:
+def posture_sensitivity(soft: SoftContactParams, depth_mm: float) -> float:
     """Largest RMS error (% of 2 N) of the fingertip force against the law, over four postures."""
     from softhand.skin.finger import POSTURES_DEG, press_finger
 
@@ -333,7 +305,7 @@ def social_touch_record(law: SkinLaw, curve: Curve, *, top_N: float = REFERENCE_
     then ``hold_s`` at that depth with the force of ``law`` (QLV). The relaxation pad is fitted
     and checked on it: its branches are exact for the law, and in holds above about 7 N it went
     unstable for 6 of the 14 skins (hold error 100 %), which the 0-2 N record avoids."""
-    t, d, _ = _ramp(curve, top_N)
+    t, d, _ = loading_ramp(curve, top_N)
     hold = t[-1] + np.geomspace(0.01, hold_s, 200)
     time_s = np.concatenate([t, hold])
     depth = np.concatenate([d, np.full(hold.size, d[-1])])
@@ -350,7 +322,8 @@ def _pad_params(law: SkinLaw, scale: tuple[float, ...] = ()) -> PadParams:
                      damping_scale=scale)
 
 
-def _fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings) -> tuple[PadParams, int]:
+def fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings
+            ) -> tuple[PadParams, int, FitStatus]:
     """Branch damping multipliers by least squares against simulated indentations."""
     n = len(law.prony.g)
     if n == 0:
@@ -363,7 +336,7 @@ def _fit_pad(law: SkinLaw, curve: Curve, settings: RigSettings) -> tuple[PadPara
         nonlocal evals
         evals += 1
         pad = _pad_params(law, tuple(np.exp(logs)))
-        out = run_rig(build_rig("soft-contact+relaxation", pad=pad, settings=settings),
+        out = run_rig(build_rig("soft-contact+relaxation", pad, settings=settings),
                       curve.time_s, curve.displacement_mm, settings=settings)
         return np.interp(grid, out.time_s, out.force_N) - target
 
@@ -395,51 +368,28 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     law_s = time.perf_counter() - t0
     main = fit_curves[0]
     results: dict[str, RepresentationResult] = {}
-    fitted: dict[str, SoftContactParams] = {}  # parsed parameters, for the pair law
+    own: dict[str, Any] = {}  # parsed parameters, for the pair law
     for rep in representations:
         t0 = time.perf_counter()
-        extra: dict[str, Any] = {}
-        if rep == "rigid":
-            params: dict[str, Any] = {"solref": [0.02, 1.0], "solimp": [0.9, 0.95, 0.001, 0.5, 2]}
-            kw: dict[str, Any] = {}
-        elif rep == "soft-contact":
-            _, d, f = _ramp(main)
-            soft, rms_n, status = fit_soft_contact(
-                d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
-            extra["fit_status"] = status.value
-            params, kw = soft.to_dict(), {"soft": soft}
-            fitted["soft-contact"] = soft
-            extra["closed_form_rms_pct_of_2N"] = 100 * rms_n / 2.0
-            extra["closed_form"] = split_errors(soft.force(d[1:]), f[1:])
-            at_2n = float(np.interp(REFERENCE_FORCE_N, f, d))
-            extra["posture_sensitivity_pct"] = _posture_sensitivity(soft, at_2n)
-        elif rep == "soft-contact+relaxation":
-            record = social_touch_record(law, main)
-            pad, evals, status = _fit_pad(law, record, settings)
-            extra["fit_status"] = status.value
-            params, kw = pad.to_dict(), {"pad": pad}
-            extra["rig_simulations"] = evals
-            extra["record"] = ("FE ramp to 2 N, then the law's 10 s hold at that depth (the pad "
-                               "went unstable in holds above 7 N for 6 of 14 skins)")
-        elif rep == "flex":
-            from softhand.skin.flex import fit_flex
-
-            # a flex pad is for contact area at social-touch forces: fitted to 2 N (an SVK
-            # solid cannot stiffen when a pocket closes, so the 2-20 N tail is left out)
-            _, d, f = _ramp(main, REFERENCE_FORCE_N)
-            fit = fit_flex(d, f, speed_mm_s=main.speed_mm_s)
-            results[rep] = _flex_result(fit, time.perf_counter() - t0)
-            continue
-        else:
-            raise ValueError(f"representation {rep!r} is unknown")
+        kind = get_representation(rep)
+        fitted = kind.fit(law, main, settings)
         fit_s = time.perf_counter() - t0
-        checked = record if rep == "soft-contact+relaxation" else main
-        out = run_rig(build_rig(rep, settings=settings, **kw), checked.time_s,
+        params = kind.to_dict(fitted.params)
+        if fitted.record is None:  # checked in its own rig (flex)
+            e = fitted.errors
+            results[rep] = RepresentationResult(rep, params, e["rms_error_pct_of_2N"],
+                                                e["max_error_pct_of_2N"], None, None,
+                                                e["step_us"], fit_s, dict(fitted.extra))
+            continue
+        own[rep] = fitted.params
+        checked = fitted.record
+        out = run_rig(build_rig(rep, fitted.params, settings=settings), checked.time_s,
                       checked.displacement_mm, settings=settings)
         rms, mx, split = loading_error(out, checked, split=True)
-        extra.update(split)
+        extra = {**fitted.extra, **split}
         relax = hold_error(out, checked)
-        sens = None if rep == "rigid" else _mass_sensitivity(rep, checked, settings, **kw)
+        sens = None if rep == "rigid" else _mass_sensitivity(rep, checked, settings,
+                                                               fitted.params)
         results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.step_us, fit_s,
                                             extra)
     provenance = {
@@ -453,13 +403,13 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     if design != HUMAN and "soft-contact" in results:
         t0 = time.perf_counter()
         tissue = reference_law(HUMAN)
-        own = fitted["soft-contact"]  # the skin's own soft contact, fitted above
+        initial = own["soft-contact"]  # the skin's own soft contact, fitted above
         top = float(main.force_N.max())
         pair = fit_pair_law(law, tissue, skin_top_N=top,
                             skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
-                            initial=own)
+                            initial=initial)
         provenance["pair_law_fit_s"] = time.perf_counter() - t0
     return SkinCalibration(design, law, results, provenance, pair)
 
@@ -498,11 +448,3 @@ def calibrate_skin(name: str, *, fe_dir: str | Path = "calibration/fe",
         raise ValueError(f"skin {name!r} is unknown; allowed: {', '.join(skin_names())}")
     return calibrate_design(name, fe_dir=fe_dir, representations=representations,
                             settings=settings)
-
-
-def _flex_result(fit, fit_s: float) -> RepresentationResult:
-    from dataclasses import asdict
-
-    return RepresentationResult("flex", asdict(fit.params), float(fit.rms_error_pct_of_2N),
-                                float(fit.max_error_pct_of_2N), None, None, float(fit.step_us),
-                                fit_s, {"rig_simulations": int(fit.n_simulations)})

@@ -29,6 +29,7 @@ linear law) and needs the ``discrete`` integrator (light bodies, stiff springs).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -103,6 +104,8 @@ class PadParams:
     def __post_init__(self) -> None:
         for name in ("reference_mm", "contact_stiffness", "max_compression_mm", "pad_mass_kg"):
             v = getattr(self, name)
+            if name == "contact_stiffness" and v == np.inf:
+                continue  # a pad whose contact adds no compliance (the hand pad, in series)
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} = {v!r} must be finite and > 0")
         scale = tuple(float(x) for x in self.damping_scale) or (1.0,) * len(self.law.prony.g)
@@ -115,7 +118,7 @@ class PadParams:
         """Piecewise-linear law for the branches: knots (m) and slope increments (N/m, >= 0)."""
         from scipy.optimize import nnls
 
-        spring = self.spring_law()
+        spring = self.spring_law
         top = spring.max_mm
         knots = np.linspace(0.0, top, self.n_knots + 1)[:-1]
         x = np.linspace(0.0, 1.2 * top, 300)
@@ -123,9 +126,13 @@ class PadParams:
         inc, _ = nnls(A, spring.force(x))
         return [float(t) * 1e-3 for t in knots], [float(k) * 1e3 for k in inc]
 
+    @functools.cached_property
     def spring_law(self) -> ElasticLaw:
-        """The pad's instantaneous spring: the law with the contact's compliance taken out."""
+        """The pad's instantaneous spring: the law with the contact's compliance taken out (an
+        infinite ``contact_stiffness``: the law itself). Computed once per pad."""
         e = self.law.elastic
+        if self.contact_stiffness == np.inf:
+            return e
         top = e.max_mm
         f = np.linspace(0.0, float(e.force(top)), 400)[1:]
         x = np.array([e.displacement_at(v) for v in f]) - f / self.contact_stiffness * 1e3
@@ -199,9 +206,10 @@ def add_pad(spec: mujoco.MjSpec, bone: mujoco.MjsBody, name: str, params: PadPar
     joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
     joint.armature = 1e-5
     law = params.law
-    spring = params.spring_law()
+    spring = params.spring_law
     pad.mass = params.pad_mass_kg
     pad.inertia = [1e-9, 1e-9, 1e-9]
+    pad.ipos = [0.0, 0.0, 0.0]  # a defined ipos makes the MJCF writer keep the <inertial>
     pad.explicitinertial = True
     _spring(spec, f"{name}_eq", joint.name, None, spline_pieces(spring, law.prony.g_inf), joint)
     knots, slopes = params.branch_knots()
@@ -217,6 +225,7 @@ def add_pad(spec: mujoco.MjSpec, bone: mujoco.MjsBody, name: str, params: PadPar
             bj.armature = 1e-6
             branch.mass = BRANCH_MASS_KG
             branch.inertia = [1e-9, 1e-9, 1e-9]
+            branch.ipos = [0.0, 0.0, 0.0]
             branch.explicitinertial = True
             _spring(spec, f"{name}_b{i}_{j}", joint.name, bj.name, [(t, g * k, 0.0, 0.0)], None)
     return pad

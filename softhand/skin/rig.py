@@ -8,7 +8,8 @@ tests), and the spring is soft enough to be stable with any mass at the timestep
 the indentation (plate descent minus bone descent: what the skin feels) and the normal contact
 force. The plate follows the *indentation* history asked for: each step it is placed at the target
 indentation plus the bone's current descent, so the load cell's give does not enter the curve
-(the paper's machine is displacement-controlled too). Any representation (:data:`REPRESENTATIONS`) of any
+(the paper's machine is displacement-controlled too). Any representation
+(:data:`softhand.skin.representations.REPRESENTATIONS`) of any
 calibrated skin runs in the same rig.
 """
 
@@ -16,17 +17,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from softhand.laws.fit import paired_arrays
-from softhand.skin.pad import PadParams, add_pad
+from softhand.skin.representations import StockContact, get_representation
 from softhand.skin.soft_contact import SoftContactParams
 
-__all__ = ["REPRESENTATIONS", "RigCurve", "RigSettings", "build_rig", "run_rig"]
+__all__ = ["RigCurve", "RigSettings", "build_rig", "run_rig"]
 
-REPRESENTATIONS = ("rigid", "soft-contact", "soft-contact+relaxation", "flex")
 SKIN_HALF_AXES_M = (0.005, 0.008, 0.0125)  # phalanx: 10 mm long, 16 mm wide; 25 mm tall so
 # that a plate 8.6 mm deep (human tissue at 20 N) is still far from its far side (a convex
 # penetration depth is only defined while the plate is inside the near half)
@@ -84,27 +85,25 @@ class RigCurve:
         return 1e6 * self.wall_s / max(self.steps, 1)
 
 
-def _check_representation(name: str) -> None:
-    if name not in REPRESENTATIONS:
-        raise ValueError(f"representation {name!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
+def build_rig(representation: str, params: Any = None, *,
+              settings: RigSettings = RigSettings()) -> mujoco.MjModel:
+    """Compile the rig for ``representation`` with its parameter object ``params`` (what
+    :meth:`~softhand.skin.representations.Representation.parse` or ``.fit`` gives; ``rigid``:
+    None for MuJoCo's stock contact). ``flex`` has its own rig (:mod:`softhand.skin.flex`).
 
-
-def build_rig(representation: str, *, soft: SoftContactParams | None = None,
-              pad: PadParams | None = None, settings: RigSettings = RigSettings()
-              ) -> mujoco.MjModel:
-    """Compile the rig for ``representation`` (``flex`` has its own rig in skin.flex)."""
-    _check_representation(representation)
-    if representation == "flex":
-        raise ValueError("the flex representation is built by softhand.skin.flex.build_flex_rig")
-    if representation == "soft-contact" and soft is None:
-        raise ValueError("soft-contact needs SoftContactParams (soft=...)")
-    if representation == "soft-contact+relaxation" and pad is None:
-        raise ValueError("soft-contact+relaxation needs PadParams (pad=...)")
+    Raises:
+        ValueError: an unknown representation, or one that needs parameters given none.
+    """
+    kind = get_representation(representation)
+    if params is None:
+        if representation != "rigid":
+            raise ValueError(f"{representation} needs its parameters (params=...)")
+        params = StockContact()
     spec = mujoco.MjSpec()
     spec.option.timestep = settings.timestep
     spec.option.gravity = [0.0, 0.0, 0.0]
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    integrator = settings.integrator or default_integrator(representation)
+    integrator = settings.integrator or kind.rig_integrator
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
     bone = spec.worldbody.add_body(name="bone")
     load_cell = bone.add_joint(name="load_cell", type=mujoco.mjtJoint.mjJNT_SLIDE,
@@ -118,9 +117,7 @@ def build_rig(representation: str, *, soft: SoftContactParams | None = None,
     bone.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
                   pos=[0, 0, SKIN_HALF_AXES_M[2] - BONE_DEPTH_M - 0.001], mass=settings.mass_kg,
                   contype=0, conaffinity=0)
-    skin_body = bone
-    if representation == "soft-contact+relaxation":
-        skin_body = add_pad(spec, bone, "skin", pad)
+    skin_body = kind.add_to_rig(spec, bone, params)
     skin_body.add_geom(name="skin", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
                        size=list(SKIN_HALF_AXES_M), contype=0, conaffinity=0, mass=0.0,
                        rgba=[0.9, 0.7, 0.6, 1])
@@ -131,28 +128,13 @@ def build_rig(representation: str, *, soft: SoftContactParams | None = None,
     stop = spec.add_pair(name="bone_plate", geomname1="bone", geomname2="plate", condim=3)
     stop.solref = [2 * settings.timestep, 1.0]  # the stiffest critically damped stop the step allows
     pair = spec.add_pair(name="skin_plate", geomname1="skin", geomname2="plate", condim=3)
-    if representation == "rigid":
-        pair.solref = [0.02, 1.0]  # MuJoCo's defaults: stock contact
-        pair.solimp = [0.9, 0.95, 0.001, 0.5, 2.0]
+    law = kind.rig_contact(params)
+    if law is None:  # stock contact
+        pair.solref, pair.solimp = list(params.solref), list(params.solimp)
     model = spec.compile()
-    if representation == "soft-contact":
-        apply_pair_law(model, "skin_plate", soft)
-    elif representation == "soft-contact+relaxation":
-        apply_pair_law(model, "skin_plate", pad_contact(pad))
+    if law is not None:
+        apply_pair_law(model, "skin_plate", law)
     return model
-
-
-def default_integrator(representation: str) -> str:
-    """``discrete`` for pads (light bodies limit-cycle under implicitfast), else implicitfast."""
-    return "discrete" if representation == "soft-contact+relaxation" else "implicitfast"
-
-
-def pad_contact(pad: PadParams) -> SoftContactParams:
-    """The stiff, linear contact that presses a pad (constant impedance, critically damped)."""
-    d = 0.3
-    k = pad.contact_stiffness * (1 - d)  # F = k r / (1 - d) at constant impedance
-    damping = 2.0 * np.sqrt(pad.contact_stiffness * pad.pad_mass_kg) * (1 - d)
-    return SoftContactParams(k, damping, (d, d, 1e-3, 0.5, 1.0))
 
 
 def pair_inverse_inertia(model: mujoco.MjModel, pair_id: int) -> float:
