@@ -326,8 +326,12 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
 
 @main.command("handshake")
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
-@click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN",
-              help="Skin of one region (repeatable), e.g. Palm1=rigid.")
+@click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN[@REPRESENTATION]",
+              help="Skin of one region (repeatable), e.g. Palm1=rigid or "
+                   "Palm2=pocket2-pu@soft-contact+relaxation.")
+@click.option("--representation", default=None,
+              help="Representation of every region: soft-contact (default), "
+                   "soft-contact+relaxation (relaxation pads) or rigid.")
 @click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
               default="neutral", show_default=True,
               help="Controller of the prosthetic hand (neutral: the paper's sensored hand).")
@@ -340,7 +344,8 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
 @click.option("--record", "record_path", default=None,
               help="Write a rerun recording here (a .rrd file; a missing folder is created).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_json) -> None:
+def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
+              as_json) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
@@ -350,9 +355,10 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     overrides = parse_skin_overrides(skin_items)
     record = checked_file(record_path, "--record", ".rrd")
     try:  # skins and their calibration files, before the episode
-        env = HandshakeEnv(design=design, skins=overrides, timestep_s=timestep_s)
+        env = HandshakeEnv(design=design, skins=overrides, representation=representation,
+                           timestep_s=timestep_s)
     except ValueError as exc:
-        bad(str(exc))
+        bad(f"--representation / --skin: {exc}" if "representation" in str(exc) else str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)
     if record is not None:
         from softhand.bench.handshake import frames_of
@@ -367,7 +373,9 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
                "|---|---|---|---|---|---|")
     for region, v in summary["regions"].items():
         mark = "yes" if v["peak_N"] > OVER_N else ""
-        click.echo(f"| {region} | {run.skins[region]} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
+        rep = run.representations.get(region, "soft-contact")
+        skin = run.skins[region] + ("" if rep in ("soft-contact", "rigid") else f"@{rep}")
+        click.echo(f"| {region} | {skin} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
                    f"{v['peak_area_mm2']:.0f} | {mark} |")
     cmp = summary["paper_over_2N"]
     click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
@@ -389,6 +397,15 @@ def handshake(design, skin_items, controller, seed, timestep_s, record_path, as_
     click.echo(f"prosthetic flexion reached (deg): {flex}; thumb rotation "
                f"{max(kin['prosthetic_thumb_rotation_deg'], 0.0):.0f}; regions touched: "
                f"{', '.join(kin['touched']) or '-'}")
+    relax = summary.get("relaxation")
+    if relax:
+        worst = max(relax.items(), key=lambda kv: kv[1]["held_N"])
+        click.echo("relaxation pads against the QLV law at their own compression, during the hold "
+                   f"(% of the held force; most loaded region {worst[0]}, "
+                   f"{worst[1]['held_N']:.2f} N): pad "
+                   f"{max(v['pad_error_pct'] for v in relax.values()):.1f} % (worst region), "
+                   f"{worst[1]['pad_error_pct']:.1f} % ({worst[0]}); a memoryless soft contact at "
+                   f"the same compression {worst[1]['soft_contact_error_pct']:.1f} %")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
 

@@ -9,6 +9,8 @@ Measures, in one process on this machine (``softhand bench handshake``):
 * error of each timestep: per controller and seed, the region forces at 2 ms and 1 ms against
   0.5 ms (largest difference of a region's mean and peak force, relative change of the summed
   mean forces, whether the regions over 2 N are the same);
+* representations on the hand (:func:`_representations`): cost per step and error against
+  the relaxation reference for a silicone and a polyurethane design;
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
   wearing rigid skins (stock contact, only the tissue indents), the commercial skin
   (prosthetic-102l) and the paper's designs: per skin and region the peak force and the peak
@@ -40,6 +42,7 @@ TIMESTEPS_S = (0.002, 0.001, 0.0005)  # the default first; the last is the refer
 ERROR_SEEDS = (0, 1, 2, 3)
 SENSITIVITY_SKINS = ("rigid", "prosthetic-102l", "solid-sil", "solid-pu", "pocket1-sil",
                      "pocket2-sil", "pocket2-pu")
+REPRESENTATION_DESIGNS = ("pocket2-sil", "pocket2-pu")  # a silicone and a polyurethane skin
 
 
 def frames_of(run: HandshakeRun) -> HandshakeFrames:
@@ -114,6 +117,51 @@ def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
     return out
 
 
+def _representations(designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[str, Any]:
+    """Per design and hand representation: cost per step relative to ``rigid`` (best of REPEATS
+    episodes each) and the error against the relaxation reference in the handshake itself.
+
+    The reference is the skin's QLV law at each region's indentation history in the relaxation
+    run (HandshakeRun.relaxation); against it, per representation, the worst region over the
+    hold: the relaxation pad's own force (``pad``), the region's contact force (``contact``), and
+    the memoryless soft contact at the same indentation (``soft-contact``). Across runs (same
+    partner, seed and controller): each representation's summed mean region force against the
+    relaxation run, and the largest difference of one region's mean force.
+    """
+    reps = ("rigid", "soft-contact", "soft-contact+relaxation")
+    out: dict[str, Any] = {}
+    for design in designs:
+        rows: dict[str, Any] = {}
+        runs = {}
+        for rep in reps:
+            best = None
+            for _ in range(REPEATS):
+                run = run_handshake(design=design, representation=rep, seed=0)
+                if best is None or run.wall_s < best.wall_s:
+                    best = run
+            runs[rep] = best
+            rows[rep] = {"steps_per_s": best.steps / best.wall_s, "nv": int(best.model.nv)}
+        ref = runs["soft-contact+relaxation"]
+        ref_table = ref.table()
+        ref_sum = sum(v["mean_N"] for v in ref_table.values())
+        relax = ref.relaxation()
+        for rep, run in runs.items():
+            table = run.table()
+            rows[rep]["cost_vs_rigid"] = rows["rigid"]["steps_per_s"] / rows[rep]["steps_per_s"]
+            rows[rep]["sum_mean_change_pct"] = 100 * (sum(v["mean_N"] for v in table.values())
+                                                      / ref_sum - 1)
+            rows[rep]["max_mean_diff_N"] = max(abs(table[r]["mean_N"] - v["mean_N"])
+                                               for r, v in ref_table.items())
+        worst = {k: max((v[k] for v in relax.values()), default=float("nan"))
+                 for k in ("pad_error_pct", "qlv_error_pct", "soft_contact_error_pct")}
+        top = max(relax, key=lambda r: relax[r]["held_N"]) if relax else None
+        rows["soft-contact+relaxation"]["error_vs_qlv_pct"] = worst["pad_error_pct"]
+        rows["soft-contact+relaxation"]["contact_error_vs_qlv_pct"] = worst["qlv_error_pct"]
+        rows["soft-contact"]["error_vs_qlv_pct"] = worst["soft_contact_error_pct"]
+        out[design] = {"representations": rows, "relaxation": relax, "most_loaded": top}
+    return out
+
+
 def run_handshake_benchmark(out_dir: str | Path = REPORTS_DIR, *,
                             skins: tuple[str, ...] = SENSITIVITY_SKINS) -> str:
     """Run the benchmark, write ``bench-handshake.json`` and ``bench-handshake.md``, return the
@@ -126,6 +174,7 @@ def run_handshake_benchmark(out_dir: str | Path = REPORTS_DIR, *,
                      for ts in TIMESTEPS_S}
     data["timestep_error"] = _timestep_errors()
     data["sensitivity"] = {c: _sensitivity(skins, c) for c in ("neutral", "open-loop")}
+    data["representations"] = _representations()
     atomic_write_json(out / "bench-handshake.json", data)
     md = _markdown(data)
     atomic_write_text(out / "bench-handshake.md", md)
@@ -182,5 +231,30 @@ def _markdown(d: dict[str, Any]) -> str:
             cells = [f"{table[s]['regions'][region]['mean_area_mm2']:.0f}" for s in skins]
             lines.append(f"| {region} | " + " | ".join(cells) + " |")
         lines.append("")
+    lines += ["## Representations on the hand (neutral controller, seed 0)", "",
+              "Cost per step against `rigid` (best of 3); error against the relaxation reference "
+              "(the skin's QLV law at each region's indentation in the relaxation run), worst region "
+              "over the grip and shake, in % of that region's largest held force; across runs, the "
+              "summed mean region force against the relaxation run:", "",
+              "| design | representation | dofs | steps/s | cost / rigid | error vs QLV % | "
+              "region contact force vs QLV % | summed mean force vs relaxation run | "
+              "max diff of a region's mean N |", "|---|---|---|---|---|---|---|---|---|"]
+    for design, r in d.get("representations", {}).items():
+        for rep, row in r["representations"].items():
+            err = row.get("error_vs_qlv_pct")
+            contact = row.get("contact_error_vs_qlv_pct")
+            lines.append(f"| {design} | {rep} | {row['nv']} | {row['steps_per_s']:.0f} | "
+                         f"{row['cost_vs_rigid']:.2f} | "
+                         f"{'-' if err is None else f'{err:.1f}'} | "
+                         f"{'-' if contact is None else f'{contact:.1f}'} | "
+                         f"{row['sum_mean_change_pct']:+.1f} % | {row['max_mean_diff_N']:.2f} |")
+    for design, r in d.get("representations", {}).items():
+        lines += ["", f"Relaxation pads of {design}, per region held above 0.5 N (% of the held "
+                  "force):", "", "| region | held N | pad compression mm | pad vs QLV | contact "
+                  "force vs QLV | memoryless soft contact vs QLV |", "|---|---|---|---|---|---|"]
+        for region, v in r["relaxation"].items():
+            lines.append(f"| {region} | {v['held_N']:.2f} | {v['max_compression_mm']:.2f} | "
+                         f"{v['pad_error_pct']:.1f} | {v['qlv_error_pct']:.1f} | "
+                         f"{v['soft_contact_error_pct']:.1f} |")
     return "\n".join(lines) + "\n"
 

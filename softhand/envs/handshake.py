@@ -122,7 +122,7 @@ class HandshakeEnv(gym.Env):
       the region forces relax as the skin's Prony terms say (polyurethane skins lose about 40 %
       of the force in a hold). Runs under the scene's ``implicitfast`` integrator at 0.5-2 ms.
       The pad compresses along its normal only: a contact on the side of a phalanx meets the
-      tissue's law alone. Costlier: 2 Prony terms x 3 branch knots + 1 dofs per skin geom;
+      tissue's law alone. Costlier: 2 Prony terms x 6 branch knots + 1 dofs per skin geom;
     * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
 
     ``flex`` is rig-only (it is calibrated on a block, not on a hand's capsules).

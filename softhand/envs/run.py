@@ -53,8 +53,10 @@ class HandshakeRun:
     def force_accounting(self) -> dict[str, float]:
         """Where the normal force between the hands came from, over the recorded frames.
 
-        ``skin_law``: a skin x tissue pair law (calibrated skin); ``tissue_law_only``: a
-        ``rigid`` region against tissue (only the tissue law);
+        ``skin_law``: a skin x tissue pair law (calibrated skin), or on a relaxation pad the part
+        of the force that pushes along the pad's axis; ``tissue_law_only``: a ``rigid`` region
+        against tissue (only the tissue law), or the rest of a relaxation pad's force (a contact
+        from the side, which the pad's slide does not take);
         ``bone_on_bone``: bones pressed through skin and tissue (no law); ``no_law``: any other
         contact between the hands. ``calibrated_share_pct``: the skin-law force inside its
         calibrated range (:func:`softhand.envs.skins.calibrated_max_force`), in % of all the force
@@ -251,6 +253,12 @@ class ContactAreas:
         self.region_of[np.asarray(region_geoms)] = np.arange(len(region_geoms))
         self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
         self.bone = np.array(["bone_" in (model.geom(g).name or "") for g in range(model.ngeom)])
+        #: per geom, the slide joint of its relaxation pad (-1: none): only the part of a contact
+        #: force that pushes along the pad's axis compresses the skin's law; the rest meets the
+        #: tissue's law alone (ACCOUNT_CLASSES "tissue_law_only")
+        self.pad_joint = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT,
+                                                     f"{model.geom(g).name}_pad")
+                                   for g in range(model.ngeom)])
         self.model = model
         self.n_regions = len(region_geoms)
         #: after each call: per region, normal force (N) of all its skin geom's contacts
@@ -277,7 +285,16 @@ class ContactAreas:
             g1, g2 = c.geom1, c.geom2
             if self.hand[g1] >= 0 and self.hand[g2] >= 0 and self.hand[g1] != self.hand[g2]:
                 law = self.laws.get((min(g1, g2), max(g1, g2)))
-                if law is not None:
+                if law is not None and law[0] == 0 and max(self.pad_joint[g1],
+                                                           self.pad_joint[g2]) >= 0:
+                    share = self._pad_share(data, c)
+                    acc[0] += f * share
+                    acc[1] += f * (1.0 - share)
+                    acc[n] += 1
+                    if f > law[1]:
+                        acc[n + 1] += 1
+                        acc[n + 2] += f * share
+                elif law is not None:
                     acc[law[0]] += f
                     acc[n] += 1
                     if f > law[1]:
@@ -297,6 +314,14 @@ class ContactAreas:
                 if r >= 0 and depth > 0 and self._in_zone(data, r, c.pos):
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
+
+    def _pad_share(self, data: mujoco.MjData, c) -> float:
+        """The share of a contact's normal force that pushes its pad geom along the pad's axis
+        (clipped to [0, 1]; the contact normal points from geom1 to geom2)."""
+        g = c.geom1 if self.pad_joint[c.geom1] >= 0 else c.geom2
+        axis = data.xaxis[self.pad_joint[g]]  # compression direction
+        push = -float(c.frame[:3] @ axis) if g == c.geom1 else float(c.frame[:3] @ axis)
+        return min(max(push, 0.0), 1.0)
 
     def _in_zone(self, data: mujoco.MjData, region: int, point) -> bool:
         site = self.zones[region]

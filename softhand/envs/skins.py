@@ -84,11 +84,10 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
         designs[region] = skin
         if own:
             reps[region] = _hand_representation(own, f"representation for region {region}")
+            if skin == "rigid" and own != "rigid":
+                raise ValueError(f"skin 'rigid' for region {region} has only the rigid "
+                                 f"representation, not {own!r}")
     for region in names:
-        if designs[region] == "rigid" and reps[region] not in ("rigid", rep) and \
-                "@" in str((overrides or {}).get(region, "")):
-            raise ValueError(f"skin 'rigid' for region {region} has only the rigid "
-                             f"representation, not {reps[region]!r}")
         if designs[region] == "rigid" or reps[region] == "rigid":
             designs[region] = reps[region] = "rigid"
     return designs, reps

@@ -98,15 +98,17 @@ class HandPad:
         armature_kg: armature of the pad's slide joint (kg): inertia that makes the pad's spline
             spring stable under ``implicitfast`` at 2 ms (the pad alone, 5 g, is not: omega h > 2
             for the stiffest skins). 10 g: a region's pad then follows the QLV law at its own
-            compression to 0.8-3.7 % of the held force over a 2 s hold (measured with each
-            shipped design pressed to about 3 N through human tissue; the largest, pocket2-pu).
+            compression to 0.8-3.6 % of the held force over a 2 s hold (measured with shipped
+            designs pressed to about 3 N through human tissue; the largest, pocket2-pu).
         n_knots: pieces of the branches' piecewise-linear law (each Prony term adds this many
-            branch dofs per skin geom).
+            branch dofs per skin geom). 6, as in the rig: with 3 the pocket's stiffening is
+            poorly split among the branches (pocket2-pu: 20 % of the held force off the law
+            instead of 3.6 %, and a third of its relaxation).
         max_compression_m: the pad's joint limit, the skin's thickness over the bone.
     """
 
     armature_kg: float = 0.01
-    n_knots: int = 3
+    n_knots: int = 6
     max_compression_m: float = 0.006
 
     def __post_init__(self) -> None:
@@ -254,8 +256,8 @@ class Flex(Representation):
 
     name = "flex"
     not_on_hand = ("a flex pad is calibrated on the rig's 16 x 10 mm block, not on a hand's "
-                   "capsules, and costs 10-40x a soft contact per step (reports/"
-                   "bench-calibration.md); use it in the rig (softhand.skin.flex)")
+                   "capsules, and costs about 340x a soft contact per step in the rig "
+                   "(reports/bench-calibration.md); use it in the rig, softhand.skin.flex")
 
     def parse(self, params, law, key="params"):
         from dataclasses import fields
