@@ -4,6 +4,7 @@
 ``softhand fe sweep``           all 12 designs, curves + summary + plot into calibration/fe
 ``softhand fe export DESIGN``   an Abaqus or CalculiX input deck of the same model
 ``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
+``softhand skin apply HAND OUT``  calibrated skin on named geoms of any MJCF hand, as MJCF
 ``softhand handshake``          one handshake with shipped calibration: region forces, rerun recording
 ``softhand render OUT.png``     a picture of the handshake (offscreen mujoco.Renderer)
 ``softhand bench fe``           speed against error of the FE stage, written to a report
@@ -322,6 +323,61 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     if run.index is not None:
         click.echo(json.dumps(run.index, indent=1) if as_json else summary_table(run.index))
     _end_of_batch("skins", len(run.written), len(names), out, run.missing, run.interrupted)
+
+
+@main.group()
+def skin() -> None:
+    """Calibrated skins on MuJoCo models."""
+
+
+@skin.command("apply")
+@click.argument("hand")
+@click.argument("out")
+@click.option("--geom", "geom_items", multiple=True, required=True,
+              metavar="GEOM=DESIGN[@REPRESENTATION]",
+              help="A geom to skin (repeatable), e.g. index_tip=pocket2-sil; representation "
+                   "soft-contact (default) or rigid.")
+@click.option("--against", "against", multiple=True, metavar="GEOM",
+              help="A counterpart geom (repeatable) [default: every collidable geom outside the "
+                   "hand].")
+@click.option("--max-force", "max_force", type=Number(0.5, 20.0, unit="N"), default=None,
+              help="Fit each skin's soft contact to its FE loading curve up to this force, "
+                   "0.5-20 N (more accurate below it) [default: the shipped 0-20 N law].")
+def skin_apply(hand, out, geom_items, against, max_force) -> None:
+    """Give the named geoms of the MJCF HAND a calibrated skin and write the model to OUT (.xml).
+
+    Each skinned geom meets each counterpart through a <pair> with the design's law in
+    solref/solimp, mass-compensated; the output loads in plain MuJoCo."""
+    import mujoco
+
+    from softhand.skin.apply import apply_skin, parse_geom_skins, skin_law_error, write_skinned
+
+    source = Path(hand)
+    if not source.is_file():
+        bad(f"HAND {hand!r}: no such file (expected an MJCF .xml)")
+    target = checked_file(out, "OUT", ".xml")
+    if target.resolve() == source.resolve():
+        bad(f"OUT {out!r} is HAND itself: write the skinned model to another file")
+    try:
+        geoms = parse_geom_skins(geom_items)
+    except ValueError as exc:
+        bad(str(exc))
+    try:
+        spec = mujoco.MjSpec.from_file(str(source))
+        spec.compile()
+    except ValueError as exc:
+        bad(f"HAND {hand!r} does not load in MuJoCo: {str(exc).splitlines()[0]}")
+    try:
+        skinned = apply_skin(spec, {g: f"{d}@{r}" for g, (d, r) in geoms.items()},
+                             against=list(against) or None, max_force_N=max_force)
+    except ValueError as exc:
+        bad(f"--geom / --against: {exc}")
+    path = write_skinned(spec, skinned, source, target)
+    for s in skinned:
+        err = "" if s.law is None else (f"; law vs its FE loading curve up to 2 N: "
+                                         f"{skin_law_error(s.design, s.law):.2f} % RMS of 2 N")
+        click.echo(f"{s.geom}: {s.design}@{s.representation}, {len(s.pairs)} pairs{err}")
+    click.echo(f"wrote {path}")
 
 
 @main.command("handshake")

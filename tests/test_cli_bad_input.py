@@ -18,6 +18,7 @@ from softhand.cli import main
 from softhand.paths import FE_DIR
 
 FAST = ["--mode", "2d", "--hold", "0"]
+HAND = str(Path(__file__).resolve().parent / "data" / "menagerie_style_hand.xml")
 
 
 @pytest.fixture(autouse=True)
@@ -173,6 +174,14 @@ def test_geometry_overrides(args, needles):
     (["fe", "export", "solid-pu", "x.inp", "--mode", "2d"], ["--mode"]),
     (["fe", "export", "solid-pu", "x.inp", "--format", "stl"], ["'--format'", "'stl'"]),
     (["bench", "calibration", "--skin", "jelly"], ["--skin 'jelly'"]),
+    (["skin", "apply", HAND, "x.xml", "--geom", "nope=solid-pu"],
+     ["geom 'nope' is not in the model"]),
+    (["skin", "apply", HAND, "x.xml", "--geom", "index_tip"],
+     ["--geom 'index_tip'", "GEOM=DESIGN"]),
+    (["skin", "apply", HAND, "x.xml", "--geom",
+      "index_tip=solid-pu", "--max-force", "50"], ["'--max-force'", "0.5 <= x <= 20 N"]),
+    (["skin", "apply", "no_such_hand.xml", "x.xml", "--geom", "index_tip=solid-pu"],
+     ["HAND 'no_such_hand.xml'"]),
 ])
 def test_unknown_names(args, needles):
     rejected(args, *needles)

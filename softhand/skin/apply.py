@@ -1,0 +1,269 @@
+"""Give the geoms of any MJCF hand a calibrated skin (``softhand skin apply``).
+
+For a hand softhand did not build (a MuJoCo Menagerie-style MJCF: default classes, tendons or
+equality couplings, any number of fingers), :func:`apply_skin` turns named geoms into calibrated
+skin pads on an :class:`mujoco.MjSpec`:
+
+* each named geom gets ``contype = conaffinity = 0`` and one explicit ``<pair>`` with every
+  counterpart geom (``against``; default: every geom outside the hand's subtree that can collide,
+  i.e. with a non-zero ``contype`` or ``conaffinity``), so that no stock contact duplicates the
+  calibrated one;
+* each pair carries the design's law in its ``solref``/``solimp`` in MuJoCo's direct form, scaled
+  by the pair's inverse inertia from one compile of the spec (the compiler's ``body_invweight0``,
+  which MuJoCo's constraint solver uses at every posture): the force at a given penetration is
+  the law's, whatever the hand's masses and posture ("mass-compensated", as the handshake);
+* the counterparts are rigid (a plate, an object): the pair's law is the skin's own
+  (:class:`softhand.skin.soft_contact.SoftContactParams`), from the shipped calibration. The
+  shipped soft contact is fitted to the whole 0-20 N FE loading curve; ``max_force_N`` instead
+  fits it, in closed form, to the shipped FE loading curve up to that force, which is more
+  accurate below it (pocket2-sil up to 2 N: 3.9 % RMS of 2 N with the 0-20 N law, 1.5 % with a
+  law fitted to 5 N; :func:`skin_law_error` measures it);
+* the law is MuJoCo's per contact point: a skinned geom that meets a flat counterpart in two
+  points at once (a capsule lying flat on a plate or a box face, which MuJoCo's colliders make two
+  contacts of) is twice as stiff as the law. The handshake has the same caveat (15 % of its
+  force is in pairs with two contacts, capsules on the palm's meshes). Skin geoms that touch in
+  one point (a fingertip's cap, a sphere, an ellipsoid) follow the law exactly;
+* a skinned geom touches only its counterparts: name the hand's own geoms with ``against`` for
+  self-contact;
+* representations: ``soft-contact`` (default) and ``rigid`` (the stock contact, kept as a pair
+  for comparison). A relaxation pad needs the skin's outward normal and a body of its own
+  (:func:`softhand.skin.representations.add_hand_pad` does that for a known normal);
+  ``flex`` is rig-only.
+
+The result is plain MJCF: :func:`write_skinned` writes ``spec.to_xml()`` with a header comment
+that records the designs, laws and the softhand version, and plain MuJoCo loads it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from softhand import __version__
+from softhand.laws.fit import REFERENCE_FORCE_N
+from softhand.paths import FE_DIR, SKINS_DIR
+from softhand.skin.representations import get_representation, loading_ramp
+from softhand.skin.rig import pair_law_values
+from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
+
+__all__ = ["APPLY_REPRESENTATIONS", "SkinnedGeom", "apply_skin", "parse_geom_skins",
+           "skin_law_error", "write_skinned"]
+
+#: the representations skin apply writes (the others need a body per pad, or are rig-only)
+APPLY_REPRESENTATIONS = ("soft-contact", "rigid")
+MAX_FORCE_RANGE_N = (0.5, 20.0)
+
+
+@dataclass(frozen=True)
+class SkinnedGeom:
+    """One skinned geom: its design, representation, law, and the pairs made for it."""
+
+    geom: str
+    design: str
+    representation: str
+    law: SoftContactParams | None
+    pairs: tuple[str, ...]
+    fit_range_N: float | None  # None: the shipped 0-20 N law
+
+
+def parse_geom_skins(items: Mapping[str, str] | Sequence[str]) -> dict[str, tuple[str, str]]:
+    """``GEOM=DESIGN[@REPRESENTATION]`` items (or a mapping geom -> ``DESIGN[@REP]``) to
+    geom -> (design, representation); ValueError naming a malformed item."""
+    pairs = items.items() if isinstance(items, Mapping) else []
+    if not isinstance(items, Mapping):
+        parsed = []
+        for item in items:
+            geom, sep, choice = str(item).partition("=")
+            if not sep or not geom.strip() or not choice.strip():
+                raise ValueError(f"--geom {item!r}: expected GEOM=DESIGN[@REPRESENTATION] "
+                                 "(e.g. index_tip=pocket2-sil)")
+            parsed.append((geom.strip(), choice.strip()))
+        pairs = parsed
+    out = {}
+    for geom, choice in pairs:
+        design, _, rep = str(choice).partition("@")
+        out[geom] = (design, rep or "soft-contact")
+    return out
+
+
+def _subtree_root(spec: mujoco.MjSpec, bodies: list[mujoco.MjsBody]) -> mujoco.MjsBody:
+    """The child of the world whose subtree holds every body of ``bodies`` (the hand)."""
+    world = spec.worldbody
+
+    def top(body: mujoco.MjsBody) -> mujoco.MjsBody:
+        while body.parent is not None and body.parent != world:
+            body = body.parent
+        return body
+
+    roots = {top(b).name for b in bodies}
+    if len(roots) != 1:
+        raise ValueError(f"the skinned geoms lie on {len(roots)} separate bodies of the world "
+                         f"({', '.join(sorted(roots))}): skin one hand at a time, or name the "
+                         "counterparts with against=")
+    return top(bodies[0])
+
+
+def _subtree_geoms(body: mujoco.MjsBody) -> set[str]:
+    names = {g.name for g in body.geoms}
+    for child in body.bodies:
+        names |= _subtree_geoms(child)
+    return names
+
+
+def _law(design: str, max_force_N: float | None, skins_dir, fe_dir) -> SoftContactParams:
+    from softhand.skin.calibrate import fe_curves, law_curve
+    from softhand.skin.files import load_calibration
+
+    cal = load_calibration(design, skins_dir, require=("soft-contact",))
+    if max_force_N is None:
+        return cal.soft_contact
+    try:
+        curve = fe_curves(design, fe_dir)[0][0]
+    except FileNotFoundError:
+        curve = law_curve(cal.law)  # reference skins: their paper-based law
+    _, d, f = loading_ramp(curve, max_force_N)
+    return fit_soft_contact(d, f).params
+
+
+def skin_law_error(design: str, law: SoftContactParams, *, top_N: float = REFERENCE_FORCE_N,
+                   fe_dir: str | os.PathLike = FE_DIR,
+                   skins_dir: str | os.PathLike = SKINS_DIR) -> float:
+    """RMS error (% of 2 N) of ``law`` against the design's FE loading curve up to ``top_N``."""
+    from softhand.skin.calibrate import fe_curves, law_curve
+    from softhand.skin.files import load_calibration
+
+    try:
+        curve = fe_curves(design, fe_dir)[0][0]
+    except FileNotFoundError:
+        curve = law_curve(load_calibration(design, skins_dir).law)
+    _, d, f = loading_ramp(curve, top_N)
+    return float(100 * np.sqrt(np.mean((law.force(d) - f) ** 2)) / REFERENCE_FORCE_N)
+
+
+def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
+               against: Sequence[str] | None = None, max_force_N: float | None = None,
+               skins_dir: str | os.PathLike = SKINS_DIR,
+               fe_dir: str | os.PathLike = FE_DIR) -> list[SkinnedGeom]:
+    """Make the named geoms of ``spec`` calibrated skin pads (see the module docstring).
+
+    Args:
+        spec: the hand (and its world), e.g. ``mujoco.MjSpec.from_file("hand.xml")``.
+        geoms: geom -> ``DESIGN[@REPRESENTATION]``, or ``GEOM=DESIGN[@REPRESENTATION]`` items.
+        against: the counterpart geoms (default: every collidable geom outside the hand).
+        max_force_N: fit each law to its FE loading curve up to this force, in [0.5, 20] N
+            (default: the shipped 0-20 N law).
+        skins_dir, fe_dir: the calibration (default: the shipped one).
+
+    Returns:
+        One :class:`SkinnedGeom` per named geom. Everything is checked before ``spec`` is
+        changed.
+
+    Raises:
+        ValueError: an unknown geom, design or representation, an unknown counterpart, no
+            counterpart, or ``max_force_N`` out of range: naming the value.
+    """
+    from softhand.skin.calibrate import skin_names
+    from softhand.skin.files import shipped_skins
+
+    chosen = parse_geom_skins(geoms)
+    if not chosen:
+        raise ValueError("no geom to skin: give at least one GEOM=DESIGN")
+    if max_force_N is not None:
+        lo, hi = MAX_FORCE_RANGE_N
+        if not (isinstance(max_force_N, (int, float)) and np.isfinite(max_force_N)
+                and lo <= max_force_N <= hi):
+            raise ValueError(f"max_force_N = {max_force_N!r}: expected a number of newtons in "
+                             f"[{lo:g}, {hi:g}] (the FE curves reach 20 N)")
+    known = {g.name for g in spec.geoms}
+    calibrated = set(shipped_skins(skins_dir))
+    for geom, (design, rep) in chosen.items():
+        if geom not in known:
+            raise ValueError(f"geom {geom!r} is not in the model; it has {len(known)} named geoms "
+                             f"(e.g. {', '.join(sorted(n for n in known if n)[:5])})")
+        if design not in calibrated:
+            allowed = [s for s in skin_names() if s in calibrated]
+            raise ValueError(f"skin {design!r} for geom {geom} is unknown; allowed: "
+                             f"{', '.join(allowed)}")
+        if rep not in APPLY_REPRESENTATIONS:
+            get_representation(rep)  # an unknown name: its own message
+            raise ValueError(f"representation {rep!r} for geom {geom} is not written by skin "
+                             f"apply (allowed: {', '.join(APPLY_REPRESENTATIONS)}): a relaxation "
+                             "pad needs its own body along the skin's normal "
+                             "(softhand.skin.representations.add_hand_pad), flex is rig-only")
+    root = _subtree_root(spec, [spec.geom(g).parent for g in chosen])
+    hand = _subtree_geoms(root)
+    if against is None:
+        others = [g.name for g in spec.geoms if g.name not in hand
+                  and (g.contype or g.conaffinity)]
+        if not others:
+            raise ValueError(f"no collidable geom outside the hand (body {root.name!r}) to press "
+                             "the skin against: name the counterparts with --against")
+        for g in spec.geoms:
+            if g.name not in hand and (g.contype or g.conaffinity) and not g.name:
+                raise ValueError("a collidable geom outside the hand has no name: name it, or "
+                                 "give the counterparts with --against")
+    else:
+        others = list(dict.fromkeys(against))
+        for name in others:
+            if name not in known:
+                raise ValueError(f"--against geom {name!r} is not in the model")
+            if name in chosen:
+                raise ValueError(f"--against geom {name!r} is one of the skinned geoms")
+    laws = {design: _law(design, max_force_N, skins_dir, fe_dir)
+            for design, rep in chosen.values() if rep == "soft-contact"}
+    made: dict[str, list[str]] = {}
+    for geom in chosen:
+        g = spec.geom(geom)
+        g.contype, g.conaffinity = 0, 0
+        made[geom] = []
+        for other in others:
+            name = f"skin_{geom}__{other}"
+            friction = np.maximum(np.asarray(g.friction), np.asarray(spec.geom(other).friction))
+            spec.add_pair(name=name, geomname1=geom, geomname2=other, condim=3,
+                          friction=[float(friction[0]), float(friction[0]),
+                                    float(friction[1]), float(friction[2]),
+                                    float(friction[2])])
+            made[geom].append(name)
+    model = spec.compile()
+    out = []
+    for geom, (design, rep) in chosen.items():
+        law = laws.get(design) if rep == "soft-contact" else None
+        for name in made[geom]:
+            pair = spec.pair(name)
+            if law is None:  # rigid: MuJoCo's stock contact
+                pair.solref, pair.solimp = [0.02, 1.0], [0.9, 0.95, 0.001, 0.5, 2.0]
+            else:
+                pair.solref, pair.solimp = pair_law_values(model, name, law)
+        out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
+                               None if law is None else max_force_N))
+    return out
+
+
+def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
+                  out: str | os.PathLike) -> Path:
+    """Write the skinned ``spec`` as MJCF to ``out`` (atomically), with a header comment that
+    records what was skinned and how; asset folders are made absolute so that the file loads
+    from anywhere. Returns the path."""
+    from softhand.io import atomic_write_text
+
+    src = Path(source).resolve().parent
+    for attr in ("meshdir", "texturedir"):  # asset paths relative to the source file
+        value = getattr(spec, attr)
+        if value and not Path(value).is_absolute():
+            setattr(spec, attr, str((src / value).resolve()))
+    lines = [f"Skinned by softhand {__version__} (softhand skin apply) from {Path(source).name};",
+             f"MuJoCo {mujoco.__version__}. Laws: shipped calibration, mass-compensated per pair."]
+    for s in skinned:
+        fit = ("shipped 0-20 N law" if s.fit_range_N is None
+               else f"soft contact fitted to the FE loading curve up to {s.fit_range_N:g} N")
+        lines.append(f"{s.geom}: {s.design}@{s.representation} ({fit}), {len(s.pairs)} pairs")
+    header = "<!--\n" + "\n".join(f"  {line}" for line in lines) + "\n-->\n"
+    spec.compile()
+    path = Path(out)
+    atomic_write_text(path, header + spec.to_xml())
+    return path
