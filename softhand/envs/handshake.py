@@ -17,6 +17,7 @@ from gymnasium import spaces
 
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
+from softhand.envs.physics import MujocoPhysics
 from softhand.envs.skins import (
     CalibratedRangeWarning,
     calibrated_max_force,
@@ -34,7 +35,6 @@ from softhand.hands import (
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
 from softhand.hands.constants import PARTNER
-from softhand.hands.skeleton import SENSOR_SLOTS, contact_sensor_force
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
@@ -43,7 +43,6 @@ __all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "M
 
 DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
 CONTACT_N = 0.05  # a region counts as touched above this force
-_NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 _GRIPPING = ("grip", "shake")
 ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
 MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
@@ -118,11 +117,13 @@ class HandshakeEnv(gym.Env):
       its solref/solimp (no memory: the 0.5 mm/s loading curve);
     * ``soft-contact+relaxation``: each skin geom rides a relaxation pad (a slide joint along its
       outward normal, the QLV law's spline spring and Maxwell branches, joint armature 10 g,
-      :class:`~softhand.skin.representations.HandPad`), its pairs carry the tissue's law alone;
-      the region forces relax as the skin's Prony terms say (polyurethane skins lose about 40 %
-      of the force in a hold). Runs under the scene's ``implicitfast`` integrator at 0.5-2 ms.
-      The pad compresses along its normal only: a contact on the side of a phalanx meets the
-      tissue's law alone. Costlier: 2 Prony terms x 6 branch knots + 1 dofs per skin geom;
+      :class:`~softhand.skin.representations.HandPad`), its pairs carry the tissue's law alone
+      (skin and tissue in series mechanically). Runs under the scene's ``implicitfast`` at
+      0.5-2 ms, at about twice the cost (2 Prony terms x 6 branch knots + 1 dofs per skin geom).
+      The pad compresses along its normal only: a contact from the side (the palm's borders, a
+      thumb's side) meets the tissue's law alone, and the force accounting says so
+      (HandshakeRun.force_accounting; 43 % of the force in the default scene);
+      HandshakeRun.relaxation() measures each pad against the QLV law;
     * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
 
     ``flex`` is rig-only (it is calibrated on a block, not on a hand's capsules).
@@ -151,6 +152,10 @@ class HandshakeEnv(gym.Env):
             allowed range; in :meth:`reset`, a bad seed; in :meth:`step`, an action that is not 6
             finite real numbers in [-1, 1].
         RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended.
+
+    Physics: every MuJoCo call of an episode goes through :attr:`physics`
+    (:class:`~softhand.envs.physics.MujocoPhysics`), the seam a batched backend would implement;
+    the partner's script, the reward and the observation stay here.
 
     Version history: v0 (softhand 0.1, unreleased): first release; before the release the default
     timestep went from 1 to 2 ms and the partner's joints got armature (region forces changed).
@@ -197,17 +202,21 @@ class HandshakeEnv(gym.Env):
         spec = skinned_scene_spec(self.skins, self.config, representations=self.representations,
                                   directory=directory)
         spec.compile()
-        self.model = mujoco.MjModel.from_xml_string(spec.to_xml())
-        self.data = mujoco.MjData(self.model)
-        m = self.model
+        m = mujoco.MjModel.from_xml_string(spec.to_xml())
         self.region_names = tuple(self.skins)
         infos = regions(m, "pro_")
         self.region_geoms = tuple(infos[r].geom for r in self.region_names)
-        # region readings: the normal forces in each region sensor's SENSOR_SLOTS slots of
-        # (found, force xyz in the contact frame); slot 0's ``found`` counts every match
-        adr = np.array([m.sensor_adr[m.sensor(infos[r].sensor).id] for r in self.region_names])
-        self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
-        self._found_idx = adr
+        # the grip force the partner regulates is what its digits feel (data gloves measure the
+        # fingers' and thumb's phalanges), not what its palm or thenar feel: a hard push on the
+        # palm must not make the partner open its fingers
+        feel = [m.sensor(i).name for i in range(m.nsensor)
+                if m.sensor(i).name.startswith("hum_feel_")
+                and m.sensor(i).name.rsplit("_", 1)[-1] in ("proximal", "middle", "distal")]
+        #: the physics, behind the seam a batched backend would implement (envs.physics)
+        self.physics = MujocoPhysics(m, self.frame_skip,
+                                     [infos[r].sensor for r in self.region_names], feel,
+                                     "hum_base")
+        self.model, self.data = m, self.physics.data
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
         self._pro_dof = m.jnt_dofadr[self._pro_joints]
@@ -217,21 +226,9 @@ class HandshakeEnv(gym.Env):
         hum = [m.actuator(a).id for a in partner_actuators()]
         self._grip_act = np.array(hum[:5])
         self._opp_act = hum[5]
-        self._mocap = m.body("hum_base").mocapid[0]
-        # views into MjData (its buffers never move): written or read every step
-        self._mocap_row = self.data.mocap_pos[self._mocap]
-        self._ctrl, self._sensordata = self.data.ctrl, self.data.sensordata
-        self._qpos, self._qvel = self.data.qpos, self.data.qvel
+        self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
         self._opp_max = min(float(m.actuator_ctrlrange[self._opp_act, 1]),
                             np.radians(PARTNER["handshake_thumb_abduction_deg"]))
-        # the grip force the partner regulates is what its digits feel (data gloves measure the
-        # fingers' and thumb's phalanges), not what its palm or thenar feel: a hard push on the
-        # palm must not make the partner open its fingers
-        feel = np.array([m.sensor_adr[i] for i in range(m.nsensor)
-                         if m.sensor(i).name.startswith("hum_feel_")
-                         and m.sensor(i).name.rsplit("_", 1)[-1] in ("proximal", "middle",
-                                                                     "distal")])
-        self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         self._range = np.full((m.ngeom, m.ngeom), np.inf)
         self._pair_name = {}
@@ -258,8 +255,7 @@ class HandshakeEnv(gym.Env):
         if options is not None and (not isinstance(options, Mapping) or options):
             raise ValueError(f"options = {show(options)}: this env takes no options (None or {{}})")
         super().reset(seed=None if seed is None else int(seed))
-        m, d = self.model, self.data
-        mujoco.mj_resetData(m, d)
+        m = self.model
         rng = self.np_random
         factor = float(rng.uniform(0.95, 1.05)) if self.randomize else 1.0
         grip = GRIP_FORCE_N * self.squeeze * (float(rng.uniform(0.9, 1.1)) if self.randomize
@@ -277,9 +273,7 @@ class HandshakeEnv(gym.Env):
         n_steps = int(np.ceil(self._script.timeline.total_s / m.opt.timestep)) + self.frame_skip
         self._mount = np.array([self._script.mount(k * m.opt.timestep) for k in range(n_steps)])
         self._step_index = 0
-        d.mocap_pos[self._mocap] = start
-        d.mocap_quat[self._mocap] = quat
-        mujoco.mj_forward(m, d)
+        self.physics.reset(start, quat)
         self._forces = np.zeros(len(self.region_names))
         self._saturated = 0
         self._beyond = 0
@@ -307,39 +301,26 @@ class HandshakeEnv(gym.Env):
         if self._ended is not None:
             raise RuntimeError(f"the episode is over ({self._ended} at t = {self.data.time:.3f} "
                                "s): call reset() before step()")
-        m, d, script = self.model, self.data, self._script
-        ctrl, opt = self._ctrl, m.opt
+        physics, script = self.physics, self._script
+        ctrl, opt = self._ctrl, self.model.opt
         ctrl[self._pro_act] = a * self._max_speed
         # the partner's grip acts once per action step (100 Hz by default), the arm every step
-        t = d.time
-        feel = np.linalg.norm(self._sensordata[self._feel_idx], axis=1)
+        t = physics.time
+        feel = physics.partner_feel()
         touched = feel[feel > CONTACT_N]
         mean = float(touched.mean()) if touched.size else 0.0
         ctrl[self._grip_act] = script.grip(t, mean, opt.timestep * self.frame_skip)
         # the thumb abducts to its handshake posture once the hands meet (abducted during the
         # reach too, it pressed the prosthetic's back with 16 N in the neutral handshake)
         ctrl[self._opp_act] = self._opp_max * (script.timeline.phase(t) in _GRIPPING)
-        mount, k, last = self._mount, self._step_index, len(self._mount) - 1
+        k, last = self._step_index, len(self._mount) - 1
         end = k + self.frame_skip
-        row = self._mocap_row
-        # sensors are read once per action step: skip them on the inner steps (they do not act on
-        # the dynamics; 35 contact sensors, read at each action)
-        flags = opt.disableflags
-        opt.disableflags = flags | _NO_SENSORS
-        try:
-            for i in range(k, end - 1):
-                row[:] = mount[min(i, last)]
-                mujoco.mj_step(m, d)
-            opt.disableflags = flags
-            row[:] = mount[min(end - 1, last)]
-            mujoco.mj_step(m, d)
-        finally:
-            opt.disableflags = flags
+        physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
         self._step_index = end
-        self._forces = contact_sensor_force(
-            self._sensordata[self._sensor_idx].reshape(-1, SENSOR_SLOTS, 4))
-        self._saturated = int((self._sensordata[self._found_idx] > SENSOR_SLOTS).sum())
+        self._forces = physics.region_forces()
+        self._saturated = physics.saturated_sensors()
         self._check_range()
+        d = self.data
         phase = script.timeline.phase(d.time)
         # a sum is finite only if every entry is (an overflow to inf is unstable anyway)
         unstable = not np.isfinite(self._qpos.sum() + self._qvel.sum())
@@ -357,19 +338,9 @@ class HandshakeEnv(gym.Env):
     # --- helpers -----------------------------------------------------------------------------
     def _check_range(self) -> None:
         """Count the contacts above their pair law's calibrated range; warn once per pair."""
-        d = self.data
-        self._beyond = 0
-        if d.ncon == 0:
-            return
-        con = d.contact
-        adr = con.efc_address
-        live = adr >= 0
-        geoms = con.geom[live]
-        force = d.efc_force[adr[live]]  # elliptic cones: a contact's first row is its normal
-        top = self._range[geoms[:, 0], geoms[:, 1]]
-        over = force > top
-        self._beyond = int(over.sum())
-        for (g1, g2), f, lim in zip(geoms[over], force[over], top[over], strict=True):
+        geoms, force, top = self.physics.contacts_above(self._range)
+        self._beyond = int(force.size)
+        for (g1, g2), f, lim in zip(geoms, force, top, strict=True):
             name = self._pair_name[(min(g1, g2), max(g1, g2))]
             if name not in self._warned:
                 self._warned.add(name)

@@ -12,11 +12,12 @@ import numpy as np
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.skins import calibrated_max_force, skin_of_pair
+from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
 
 __all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
 
-OVER_N = 2.0  # the paper's Fig. 4 threshold
+OVER_N = REFERENCE_FORCE_N  # the paper's Fig. 4 threshold, 2 N
 #: where the normal force between the two hands comes from (force accounting)
 ACCOUNT_CLASSES = ("skin_law", "tissue_law_only", "bone_on_bone", "no_law")
 

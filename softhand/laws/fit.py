@@ -25,6 +25,7 @@ from scipy.optimize import least_squares, nnls
 
 from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector, knots_at
 from softhand.laws.qlv import Prony, qlv_force, qlv_response_matrix
+from softhand.paper import paper
 from softhand.validate import check_mapping, check_number, join, show
 
 __all__ = [
@@ -67,7 +68,8 @@ def fit_status(result, what: str) -> FitStatus:
     return FitStatus.BUDGET
 
 
-REFERENCE_FORCE_N = 2.0
+#: the social-touch force of the paper (its loading went to 2 N; its comparisons are at 2 N)
+REFERENCE_FORCE_N = float(paper()["loading"]["max_force_N"])
 
 
 #: Forces (N) at whose depths the elastic law's interior knots sit (fit_skin_law).

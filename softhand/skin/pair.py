@@ -25,6 +25,7 @@ import numpy as np
 
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import SkinLaw, split_errors
+from softhand.paper import paper
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 from softhand.validate import check_mapping, check_number, join, show
 
@@ -34,7 +35,8 @@ _SAMPLES = 240
 #: Error up to 2 N (% of 2 N) above which a fit started from the skin's own law is redone with
 #: the multi-start search.
 RETRY_PCT_OF_2N = 2.5
-_RAMP_MM_S = 0.5  # the paper's plate speed: the loading curve each soft contact is fitted to
+#: the paper's plate speed: the loading curve each soft contact is fitted to
+_RAMP_MM_S = float(paper()["loading"]["plate_speed_mm_s"])
 
 
 def loading_inverse(law: SkinLaw, force_N: np.ndarray, *, top_N: float) -> np.ndarray:

@@ -43,6 +43,7 @@ from rerun.chunk import RrdReader
 
 from softhand.hands import regions
 from softhand.io import check_writable_file
+from softhand.laws.fit import REFERENCE_FORCE_N
 
 __all__ = [
     "ARROW_M_PER_N",
@@ -58,7 +59,7 @@ __all__ = [
 HAND_PREFIXES: tuple[str, ...] = ("pro_", "hum_")
 #: Fig. 4 of the paper marks the regions whose handshake force exceeds 2 N
 #: (``paper()["handshake"]["over_2N"]``); above it the force colours turn warm.
-STANDOUT_FORCE_N = 2.0
+STANDOUT_FORCE_N = REFERENCE_FORCE_N
 #: Length of a contact-normal arrow per newton of normal force (m/N).
 ARROW_M_PER_N = 0.01
 #: Contact point radius (m) at 0 N and its increase at max_force_N.
