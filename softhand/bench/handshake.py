@@ -249,7 +249,7 @@ def _markdown(d: dict[str, Any]) -> str:
                          f"{'-' if contact is None else f'{contact:.1f}'} | "
                          f"{row['sum_mean_change_pct']:+.1f} % | {row['max_mean_diff_N']:.2f} |")
     for design, r in d.get("representations", {}).items():
-        lines += ["", f"Relaxation pads of {design}, per region held above 0.5 N (% of the held "
+        lines += ["", f"Relaxation pads of {design}, per region held above 1 N (% of the held "
                   "force):", "", "| region | held N | pad compression mm | pad vs QLV | contact "
                   "force vs QLV | memoryless soft contact vs QLV |", "|---|---|---|---|---|---|"]
         for region, v in r["relaxation"].items():

@@ -116,7 +116,7 @@ class HandshakeRun:
         out["partner_beyond_range_deg"] = {"max": worst[0], "joint": worst[1]}
         return out
 
-    def relaxation(self, *, min_held_N: float = 0.5) -> dict[str, dict[str, float]]:
+    def relaxation(self, *, min_held_N: float = 1.0) -> dict[str, dict[str, float]]:
         """How the relaxation pads followed the skin's QLV law while the partner held the grip.
 
         For each region on a relaxation pad whose skin carried more than ``min_held_N`` during

@@ -18,11 +18,13 @@ skin pads on an :class:`mujoco.MjSpec`:
   fits it, in closed form, to the shipped FE loading curve up to that force, which is more
   accurate below it (pocket2-sil up to 2 N: 3.9 % RMS of 2 N with the 0-20 N law, 1.5 % with a
   law fitted to 5 N; :func:`skin_law_error` measures it);
-* the law is MuJoCo's per contact point: a skinned geom that meets a flat counterpart in two
-  points at once (a capsule lying flat on a plate or a box face, which MuJoCo's colliders make two
-  contacts of) is twice as stiff as the law. The handshake has the same caveat (15 % of its
-  force is in pairs with two contacts, capsules on the palm's meshes). Skin geoms that touch in
-  one point (a fingertip's cap, a sphere, an ellipsoid) follow the law exactly;
+* the law is MuJoCo's per contact point: a skinned geom that meets a counterpart in two points
+  at once is twice as stiff as the law. MuJoCo's capsule-box and capsule-plane colliders make two
+  contacts of a capsule lying flat on a face, and its convex-convex collider (meshes) makes
+  several when the ``multiccd`` flag is on (the default): the handshake turns multiccd off (it had
+  15 % of its force in two-contact capsule-on-mesh pairs); for a model of your own, turn it off
+  too when a skinned geom or its counterpart is a mesh. Skin geoms that touch in one point (a
+  fingertip's cap, a sphere, an ellipsoid) follow the law exactly;
 * a skinned geom touches only its counterparts: name the hand's own geoms with ``against`` for
   self-contact;
 * representations: ``soft-contact`` (default) and ``rigid`` (the stock contact, kept as a pair

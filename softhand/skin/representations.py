@@ -255,9 +255,11 @@ class Flex(Representation):
     """A tetrahedral flex pad (contact area and pressure; its own rig)."""
 
     name = "flex"
-    not_on_hand = ("a flex pad is calibrated on the rig's 16 x 10 mm block, not on a hand's "
-                   "capsules, and costs about 340x a soft contact per step in the rig "
-                   "(reports/bench-calibration.md); use it in the rig, softhand.skin.flex")
+    not_on_hand = ("MuJoCo 4 integrates flex elasticity only under the discrete integrator, "
+                   "under which the hand's calibrated soft contacts do not hold (thousands of % "
+                   "off in the rig); a flex pad is also calibrated on the rig's block, not on a "
+                   "hand's capsules, and costs about 340x a soft contact per step; use it in the "
+                   "rig, softhand.skin.flex")
 
     def parse(self, params, law, key="params"):
         from dataclasses import fields
