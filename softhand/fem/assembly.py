@@ -160,8 +160,15 @@ class Assembler:
             fe[a:b] = np.einsum("eqvk,eqv->ek", B[a:b], S[a:b] * self.wdet[a:b, :, None])
 
         self._blocks(strain_force, ne)
+        self._element_forces = fe  # of the last evaluation, for force_of()
         f = np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=mesh.n_dofs)
         return f, lambda: self._tangent(B, D, S), ElementState(new_groups)
+
+    def force_of(self, elements: np.ndarray) -> np.ndarray:
+        """Internal force vector of ``elements`` alone, at the last :meth:`evaluate`."""
+        fe = self._element_forces[elements]
+        return np.bincount(self.edofs[elements].ravel(), weights=fe.ravel(),
+                           minlength=self.mesh.n_dofs)
 
     def _blocks(self, fn, n: int) -> list:
         """``fn(start, stop)`` over ``self.threads`` contiguous blocks of ``range(n)``, in order."""

@@ -25,6 +25,7 @@ from softhand.fem.contact import GapSet, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
 from softhand.fem.materials import Material, Moduli, material
 from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh
+from softhand.fem.sensors import SensorPatch, SensorReader, default_patches
 from softhand.parallel import check_threads, single_threaded_blas
 
 __all__ = [
@@ -88,6 +89,9 @@ class IndentationSettings:
             the CPUs this process may use, at most 4); BLAS stays single-threaded during the run,
             so these threads are the run's only parallelism. Does not change the result.
         geometry: overrides of :class:`PhalanxGeometry` fields.
+        sensors: embedded sensor patches (:class:`softhand.fem.sensors.SensorPatch`) read at
+            every output time; None: a 4 x 4 mm patch under the indenter at each placement the
+            design has (:func:`softhand.fem.sensors.default_patches`); () for none.
         materials: per material name (``sil``, ``pu``), constants replacing Table 3 (keys
             ``nu``, ``mu_MPa``, ``alpha``, ``g``, ``tau_s``).
     """
@@ -111,6 +115,7 @@ class IndentationSettings:
     threads: int | None = None
     geometry: dict[str, float] = field(default_factory=dict)
     materials: dict[str, dict] = field(default_factory=dict)
+    sensors: tuple[SensorPatch, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in ("3d", "2d"):
@@ -133,6 +138,9 @@ class IndentationSettings:
         for name in self.materials:  # every constant, Prony terms too, even if elastic_only
             material(name, moduli=self.moduli, elastic_only=False,
                      constants=self.materials.get(name))
+        if self.sensors is not None and not all(isinstance(p, SensorPatch)
+                                                for p in self.sensors):
+            raise ValueError(f"sensors = {self.sensors!r}: expected a tuple of SensorPatch")
         unknown = set(self.geometry) - set(PhalanxGeometry.__dataclass_fields__)
         if unknown:
             raise ValueError(f"geometry fields {sorted(unknown)} are unknown; allowed: "
@@ -156,6 +164,8 @@ class IndentationResult:
         log: one record per accepted step (Newton iterations, residual, contact points).
         wall_s: wall-clock time of the run.
         n_dofs, n_elements: model size.
+        embedded_sensors: per sensor patch name: ``placement``, ``area_mm2`` and ``force_N``
+            (aligned with ``time_s``; :mod:`softhand.fem.sensors`).
     """
 
     design: str
@@ -169,6 +179,7 @@ class IndentationResult:
     wall_s: float
     n_dofs: int
     n_elements: int
+    embedded_sensors: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def displacement_at(self, force_N: float) -> float | None:
         """Plate displacement (mm) where the ramp first reaches ``force_N``, or None."""
@@ -222,6 +233,9 @@ class IndentationResult:
             "time_s": self.time_s.tolist(),
             "displacement_mm": self.displacement_mm.tolist(),
             "force_N": self.force_N.tolist(),
+            "embedded_sensors": {name: {"placement": v["placement"], "area_mm2": v["area_mm2"],
+                                        "force_N": np.asarray(v["force_N"]).tolist()}
+                                 for name, v in self.embedded_sensors.items()},
         }
 
 
@@ -254,6 +268,15 @@ class _Model:
         self.free = np.flatnonzero(free)
         self.scale = self.mesh.symmetry_factor * self.mesh.length_mm
         self.penalty = settings.penalty_N_mm3
+        patches = default_patches(geom) if settings.sensors is None else settings.sensors
+        self.sensors = SensorReader(self.mesh, geom, patches, n_gauss, self.penalty)
+
+    def read_sensors(self, u: np.ndarray) -> dict[str, float]:
+        """Each sensor patch's force at the state of the last converged Newton step."""
+        outer = self.asm.force_of(self.sensors.outer_elements())
+        internal = self.asm.force_of(np.arange(self.mesh.n_elements))
+        gaps = self.pocket.gaps(u) if self.pocket is not None else None
+        return self.sensors.read(outer, internal, gaps)
 
     def plate_force(self, u: np.ndarray, d: float) -> float:
         return self.plate.force(u, self.penalty, -d) * self.scale
@@ -353,6 +376,7 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
     state = model.asm.initial_state()
     t, d, F = 0.0, 0.0, 0.0
     times, disps, forces, holds = [0.0], [0.0], [0.0], [False]
+    readings = {p.label: [0.0] for p in model.sensors.patches}
     log: list[dict] = []
     dd, dd_prev, k_est = 0.02, None, None
     status = Status.REACHED_DEPTH
@@ -371,6 +395,8 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
         disps.append(d)
         forces.append(F)
         holds.append(phase == "hold")
+        for name, value in model.read_sensors(u).items():
+            readings[name].append(value)
 
     # --- ramp ----------------------------------------------------------------------------
     while True:
@@ -449,4 +475,8 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
         force_N=np.array(forces), hold=np.array(holds), status=status, log=log,
         wall_s=time.perf_counter() - t_start, n_dofs=model.mesh.n_dofs,
         n_elements=model.mesh.n_elements,
+        embedded_sensors={p.label: {"placement": p.placement,
+                                    "area_mm2": model.sensors.area_mm2[p.label],
+                                    "force_N": np.array(readings[p.label])}
+                          for p in model.sensors.patches},
     )
