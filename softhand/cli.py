@@ -10,6 +10,7 @@
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 ``softhand bench handshake``    handshake speed and the skins side by side
+``softhand bench sensors``      embedded sensors of the 12 designs: sensitivity, dead band, relaxation
 
 Every argument and input file is checked before any work starts. Exit status:
 
@@ -536,6 +537,22 @@ def bench_handshake(out_dir) -> None:
     from softhand.bench.handshake import run_handshake_benchmark
 
     click.echo(run_handshake_benchmark(checked_dir(out_dir, "--out")))
+
+
+@bench.command("sensors")
+@_OPT_REPORTS
+@click.option("--design", "designs", multiple=True,
+              help="Designs to run (repeatable) [default: all 12].")
+def bench_sensors(out_dir, designs) -> None:
+    """Embedded sensors of the designs: sensitivity, dead band and relaxation per placement."""
+    from softhand.bench.sensors import run_sensor_table
+    from softhand.fem.geometry import DESIGNS
+
+    out = checked_dir(out_dir, "--out")
+    for d in designs:
+        if d not in DESIGNS:
+            bad(f"--design {d!r} is unknown; allowed: {', '.join(DESIGNS)}")
+    click.echo(run_sensor_table(out, designs=tuple(dict.fromkeys(designs)) or tuple(DESIGNS)))
 
 
 @bench.command("calibration")

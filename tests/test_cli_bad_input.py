@@ -174,6 +174,7 @@ def test_geometry_overrides(args, needles):
     (["fe", "export", "solid-pu", "x.inp", "--mode", "2d"], ["--mode"]),
     (["fe", "export", "solid-pu", "x.inp", "--format", "stl"], ["'--format'", "'stl'"]),
     (["bench", "calibration", "--skin", "jelly"], ["--skin 'jelly'"]),
+    (["bench", "sensors", "--design", "jelly"], ["--design 'jelly'", "pocket2-pu"]),
     (["skin", "apply", HAND, "x.xml", "--geom", "nope=solid-pu"],
      ["geom 'nope' is not in the model"]),
     (["skin", "apply", HAND, "x.xml", "--geom", "index_tip"],
