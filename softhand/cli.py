@@ -53,6 +53,7 @@ from softhand.cli_inputs import (
     designs_of,
     guard_shipped,
     make_settings,
+    parse_sensors,
     parse_skin_overrides,
     progress_bar,
     shipped_settings_differ,
@@ -151,16 +152,25 @@ def fe() -> None:
 @fe.command("indent")
 @click.argument("design")
 @with_options(FE_OPTIONS)
+@click.option("--sensor", "sensor_items", multiple=True, metavar="PLACEMENT[:WxL][@X,Z]",
+              help="An embedded sensor patch (repeatable): bone, interface or pocket-floor, its "
+                   "size in mm (default 4x4) and centre [default: 4x4 mm under the indenter at "
+                   "each placement the design has].")
 @click.option("--out", "out_dir", help="Write the curve CSV and summary JSON into this folder.")
 @click.option("--force", is_flag=True, help="Allow --out inside the shipped calibration/.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def fe_indent(design, out_dir, force, as_json, **kw) -> None:
+def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
     """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate."""
+    from dataclasses import replace
+
     from softhand.fem.solver import ConvergenceError, Status, indent
     from softhand.fem.sweep import write_results
 
     (name,) = designs_of([design])
     settings = make_settings([name], **kw)
+    sensors = parse_sensors(sensor_items, name, settings.geometry)
+    if sensors is not None:
+        settings = replace(settings, sensors=sensors)
     out = checked_dir(out_dir, "--out")
     if out is not None:
         guard_shipped(out, complete=False, force=force, what=f"one design ({name})")

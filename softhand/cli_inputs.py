@@ -228,6 +228,46 @@ def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **
     return settings
 
 
+def parse_sensors(items: tuple[str, ...], design: str, geometry: dict[str, float]):
+    """``--sensor PLACEMENT[:WxL][@X,Z]`` items as sensor patches that fit the design's part
+    (None when no item: the defaults); every error names the flag and the value."""
+    from softhand.fem.geometry import parse_design
+    from softhand.fem.sensors import SensorPatch
+
+    if not items:
+        return None
+    patches = []
+    for item in items:
+        text, _, where = item.partition("@")
+        placement, _, size = text.partition(":")
+        kw: dict[str, float] = {}
+        try:
+            if size:
+                w, sep, ln = size.lower().partition("x")
+                if not sep:
+                    raise ValueError("size")
+                kw["width_mm"], kw["length_mm"] = float(w), float(ln)
+            if where:
+                x, sep, z = where.partition(",")
+                if not sep:
+                    raise ValueError("centre")
+                kw["center_x_mm"], kw["center_z_mm"] = float(x), float(z)
+        except ValueError:
+            bad(f"--sensor {item!r}: expected PLACEMENT[:WIDTHxLENGTH][@X,Z] in mm, e.g. "
+                "bone:4x4 or pocket-floor:3x3@0,1")
+        name = item if (size or where) else placement
+        try:
+            patch = SensorPatch(placement, name=name, **kw)
+            patch.check_fits(parse_design(design).geometry(**geometry))
+        except ValueError as exc:
+            bad(f"--sensor {item!r}: {exc}")
+        patches.append(patch)
+    names = [p.label for p in patches]
+    if len(set(names)) != len(names):
+        bad(f"--sensor: the patches {names} are not distinct")
+    return tuple(patches)
+
+
 def shipped_settings_differ(out: Path, settings) -> list[str]:
     """Settings of ``settings`` that differ from those the folder's summary.json records."""
     from dataclasses import asdict

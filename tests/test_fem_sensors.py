@@ -126,6 +126,12 @@ def test_cli_json_has_the_embedded_sensors_aligned_with_time():
     assert set(sensors) == {"bone", "interface", "pocket-floor"}
     for v in sensors.values():
         assert len(v["force_N"]) == len(out["time_s"]) and v["area_mm2"] > 0
+    res = CliRunner().invoke(main, ["fe", "indent", "pocket2-pu", "--mode", "2d", "--hold", "0",
+                                    "--sensor", "pocket-floor:3x3", "--sensor", "bone", "--json"])
+    assert res.exit_code == 0, res.output
+    sensors = json.loads(res.output)["embedded_sensors"]
+    assert set(sensors) == {"pocket-floor:3x3", "bone"}
+    assert sensors["pocket-floor:3x3"]["area_mm2"] < 16.0
 
 
 def test_design_table_row_has_the_pocket_dead_band_and_the_relaxation():

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 
 from softhand.bench.common import machine_info, machine_line
+from softhand.fem import solver
 from softhand.fem.geometry import DESIGNS
-from softhand.fem.solver import IndentationSettings, indent
+from softhand.fem.solver import IndentationSettings
 from softhand.io import atomic_write_json, atomic_write_text
 from softhand.paths import REPORTS_DIR, SKINS_DIR
 
@@ -31,7 +32,7 @@ HOLD_S = 10.0
 
 def sensor_row(design: str, settings: IndentationSettings | None = None) -> dict[str, Any]:
     """One design's sensors: per placement sensitivity, dead band (pocket floor) and relaxation."""
-    r = indent(design, settings or IndentationSettings(hold_s=HOLD_S))
+    r = solver.indent(design, settings or IndentationSettings(hold_s=HOLD_S))
     end = int(np.flatnonzero(~r.hold)[-1])
     row: dict[str, Any] = {"plate_N": float(r.force_N[end]),
                            "plate_relaxation_pct": float(100 * (1 - r.force_N[-1] / r.force_N[end])),
