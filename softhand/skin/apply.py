@@ -49,7 +49,7 @@ import numpy as np
 from softhand import __version__
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paths import FE_DIR, SKINS_DIR
-from softhand.skin.representations import get_representation, loading_ramp
+from softhand.skin.representations import StockContact, get_representation, loading_ramp
 from softhand.skin.rig import pair_law_values
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
@@ -238,7 +238,8 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
         for name in made[geom]:
             pair = spec.pair(name)
             if law is None:  # rigid: MuJoCo's stock contact
-                pair.solref, pair.solimp = [0.02, 1.0], [0.9, 0.95, 0.001, 0.5, 2.0]
+                stock = StockContact()
+                pair.solref, pair.solimp = list(stock.solref), list(stock.solimp)
             else:
                 pair.solref, pair.solimp = pair_law_values(model, name, law)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
