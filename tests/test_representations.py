@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from softhand.hands.skeleton import new_spec
 from softhand.laws.references import HUMAN
 from softhand.skin.files import load_calibration, shipped_skins
 from softhand.skin.representations import (
@@ -48,11 +49,7 @@ def _pressed_pad(design: str, *, timestep: float = 0.002, hold_s: float = 2.0,
     how many times MuJoCo found the simulation unstable (and reset it)."""
     cal = load_calibration(design)
     tissue = load_calibration(HUMAN).soft_contact
-    spec = mujoco.MjSpec()
-    spec.option.timestep = timestep
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec = new_spec("hand_pad", timestep_s=timestep, gravity_m_s2=0.0)  # the hands' options
     seg = spec.worldbody.add_body(name="segment")
     seg.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
                  mass=0.05, contype=0, conaffinity=0)

@@ -76,16 +76,16 @@ class SkinnedGeom:
 def parse_geom_skins(items: Mapping[str, str] | Sequence[str]) -> dict[str, tuple[str, str]]:
     """``GEOM=DESIGN[@REPRESENTATION]`` items (or a mapping geom -> ``DESIGN[@REP]``) to
     geom -> (design, representation); ValueError naming a malformed item."""
-    pairs = items.items() if isinstance(items, Mapping) else []
-    if not isinstance(items, Mapping):
-        parsed = []
+    if isinstance(items, Mapping):
+        pairs = list(items.items())
+    else:
+        pairs = []
         for item in items:
             geom, sep, choice = str(item).partition("=")
             if not sep or not geom.strip() or not choice.strip():
                 raise ValueError(f"--geom {item!r}: expected GEOM=DESIGN[@REPRESENTATION] "
                                  "(e.g. index_tip=pocket2-sil)")
-            parsed.append((geom.strip(), choice.strip()))
-        pairs = parsed
+            pairs.append((geom.strip(), choice.strip()))
     out = {}
     for geom, choice in pairs:
         design, _, rep = str(choice).partition("@")
