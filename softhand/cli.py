@@ -10,7 +10,8 @@
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 ``softhand bench handshake``    handshake speed and the skins side by side
-``softhand bench sensors``      embedded sensors of the 12 designs: sensitivity, dead band, relaxation
+``softhand bench sensors``      embedded sensors: the design table, transfer curves, the handshake
+``softhand sensors calibrate``  FE sensor records and transfer laws per design and placement
 
 Every argument and input file is checked before any work starts. Exit status:
 
@@ -46,6 +47,7 @@ from softhand.cli_inputs import (
     EXPORT_OPTIONS,
     FE_OPTIONS,
     OPT_THREADS,
+    SENSOR_OPTIONS,
     Number,
     bad,
     checked_dir,
@@ -53,13 +55,16 @@ from softhand.cli_inputs import (
     designs_of,
     guard_shipped,
     make_settings,
+    parse_placement_items,
     parse_sensors,
     parse_skin_overrides,
     progress_bar,
+    sensor_flag_message,
+    sensor_spec_of,
     shipped_settings_differ,
     with_options,
 )
-from softhand.paths import FE_DIR, REPORTS_DIR, SKINS_DIR, is_shipped
+from softhand.paths import FE_DIR, REPORTS_DIR, SENSORS_DIR, SKINS_DIR, is_shipped
 
 EXIT_CONVERGENCE, EXIT_INTERRUPTED = 3, 130
 
@@ -410,9 +415,20 @@ def skin_apply(hand, out, geom_items, against, max_force) -> None:
                    "0.0005-0.002 s). Actions stay at 100 Hz.")
 @click.option("--record", "record_path", default=None,
               help="Write a rerun recording here (a .rrd file; a missing folder is created).")
+@click.option("--sensor-placement", "placement_items", multiple=True,
+              metavar="[REGION=]PLACEMENT",
+              help="Where the embedded sensors sit (repeatable): bone, interface or "
+                   "pocket-floor, for every region or one [default: interface].")
+@click.option("--signal", type=click.Choice(["contact", "sensor"]), default="contact",
+              show_default=True,
+              help="What the neutral and force controllers feel: the true contact forces or the "
+                   "embedded sensors (their calibrated read-out).")
+@click.option("--target", "target_N", type=Number(0.05, 20, unit="N"), default=None,
+              help="Force the force controller holds on each digit, 0.05-20 N [default: 2.5].")
+@with_options(SENSOR_OPTIONS)
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
-              as_json) -> None:
+              placement_items, signal, target_N, as_json, **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
@@ -421,12 +437,25 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     overrides = parse_skin_overrides(skin_items)
     record = checked_file(record_path, "--record", ".rrd")
-    try:  # skins and their calibration files, before the episode
+    placement = parse_placement_items(placement_items)
+    spec = sensor_spec_of(**sensor_kw)
+    settings = {}
+    if target_N is not None:
+        if controller != "force":
+            bad(f"--target {target_N:g}: only the force controller holds a target "
+                f"(--controller force); got --controller {controller}")
+        settings["target_N"] = target_N
+    try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
-                           timestep_s=timestep_s)
+                           timestep_s=timestep_s, sensor=spec, sensor_placement=placement)
     except ValueError as exc:
-        bad(f"--representation / --skin: {exc}" if "representation" in str(exc) else str(exc))
-    run = run_handshake(controller=controller, seed=seed, env=env)
+        msg = str(exc)
+        if msg.startswith("sensor "):
+            bad(sensor_flag_message(msg) if "placement" not in msg
+                else f"--sensor-placement: {msg}")
+        bad(f"--representation / --skin: {exc}" if "representation" in msg else msg)
+    run = run_handshake(controller=controller, seed=seed, env=env, signal=signal,
+                        controller_settings=settings)
     if record is not None:
         from softhand.bench.handshake import frames_of
         from softhand.viz import record_handshake
@@ -436,14 +465,15 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     if as_json:
         click.echo(json.dumps(summary, indent=1))
         return
-    click.echo("| region | skin | peak N | mean N | peak area mm^2 | > 2 N |\n"
-               "|---|---|---|---|---|---|")
+    click.echo("| region | skin | peak N | mean N | peak area mm^2 | > 2 N | sensor | "
+               "sensor peak N | sensor mean N |\n|---|---|---|---|---|---|---|---|---|")
     for region, v in summary["regions"].items():
         mark = "yes" if v["peak_N"] > OVER_N else ""
         rep = run.representations.get(region, "soft-contact")
         skin = run.skins[region] + ("" if rep in ("soft-contact", "rigid") else f"@{rep}")
         click.echo(f"| {region} | {skin} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
-                   f"{v['peak_area_mm2']:.0f} | {mark} |")
+                   f"{v['peak_area_mm2']:.0f} | {mark} | {v['sensor_placement']} | "
+                   f"{v['sensor_peak']:.2f} | {v['sensor_mean']:.2f} |")
     cmp = summary["paper_over_2N"]
     click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
     click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "
@@ -552,9 +582,11 @@ def bench_handshake(out_dir) -> None:
 @bench.command("sensors")
 @_OPT_REPORTS
 @click.option("--design", "designs", multiple=True,
-              help="Designs to run (repeatable) [default: all 12].")
-def bench_sensors(out_dir, designs) -> None:
-    """Embedded sensors of the designs: sensitivity, dead band and relaxation per placement."""
+              help="Designs of the table (repeatable) [default: all 12].")
+@click.option("--no-handshake", is_flag=True,
+              help="Only the design table and the transfer curves (no handshakes, ~2 min).")
+def bench_sensors(out_dir, designs, no_handshake) -> None:
+    """Embedded sensors: design table, transfer curves, handshake and controllers on sensors."""
     from softhand.bench.sensors import run_sensor_table
     from softhand.fem.geometry import DESIGNS
 
@@ -562,7 +594,52 @@ def bench_sensors(out_dir, designs) -> None:
     for d in designs:
         if d not in DESIGNS:
             bad(f"--design {d!r} is unknown; allowed: {', '.join(DESIGNS)}")
-    click.echo(run_sensor_table(out, designs=tuple(dict.fromkeys(designs)) or tuple(DESIGNS)))
+    click.echo(run_sensor_table(out, designs=tuple(dict.fromkeys(designs)) or None,
+                                handshakes=not no_handshake))
+
+
+@main.group()
+def sensors() -> None:
+    """Embedded sensors: FE records and transfer laws."""
+
+
+@sensors.command("calibrate")
+@click.option("--out", "out_dir", default=str(SENSORS_DIR), show_default=True,
+              help="Folder for fe/ (records) and transfer.json.")
+@click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
+@click.option("--fit-only", is_flag=True,
+              help="Refit the transfer laws from the records already in --out/fe (no FE run).")
+@with_options((OPT_THREADS,))
+@click.option("--force", is_flag=True,
+              help="Allow writing a subset of the designs into the shipped calibration/.")
+def sensors_calibrate(out_dir, designs, fit_only, threads, force) -> None:
+    """Run the FE sensor records (0.5 and 2 mm/s to 20 N, 10 s hold) and fit the transfer laws."""
+    from softhand.fem.geometry import DESIGNS
+    from softhand.sensors import calibrate as cal
+
+    names = designs_of(dict.fromkeys(designs or DESIGNS))
+    out = checked_dir(out_dir, "--out")
+    guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
+                  what=f"{len(names)} of the 12 designs")
+    if fit_only:
+        for n in names:
+            try:
+                cal.read_records(out, n)
+            except (OSError, ValueError, KeyError) as exc:
+                bad(f"--out {str(out)!r}: {exc} (run without --fit-only to make the records)")
+    else:
+        _, missing = cal.run_sensor_fe(names, out, threads=threads)
+        if missing:
+            raise Stopped(f"error: {len(missing)} FE records did not finish ({', '.join(missing)});"
+                          f" the finished ones are in {out / 'fe'}; no law was fitted",
+                          EXIT_CONVERGENCE)
+    data = cal.fit_all(names, out)  # written at the end, atomically: Ctrl-C leaves the old file
+    for design, per in data["laws"].items():
+        errs = ", ".join(f"{v['placement']} {v['fitted'][0]['rms_pct']:.2f}/"
+                         f"{(v['validated'] or [{'rms_pct': float('nan')}])[0]['rms_pct']:.2f} %"
+                         for v in per.values())
+        click.echo(f"{design}: RMS error fit/validation, % of the reading at 20 N: {errs}")
+    click.echo(f"wrote {out / 'transfer.json'}")
 
 
 @bench.command("calibration")

@@ -290,3 +290,76 @@ def parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
                 "Palm1=pocket2-pu@soft-contact+relaxation)")
         out[region.strip()] = design.strip()
     return out
+
+
+# --- embedded sensors (softhand handshake) --------------------------------------------------------
+
+#: SensorSpec field -> its flag
+SENSOR_FLAGS = {"noise_N": "--sensor-noise", "latency_s": "--sensor-latency",
+                "period_s": "--sensor-period", "threshold_N": "--sensor-threshold",
+                "full_scale_N": "--sensor-full-scale", "resolution_N": "--sensor-resolution",
+                "hysteresis_pct": "--sensor-hysteresis"}
+
+SENSOR_OPTIONS = (
+    click.option("--sensor-noise", "noise_N", type=Number(0, 10, unit="N"), default=None,
+                 help="RMS noise of each sample, 0-10 N [default: 0.022, half a 10-bit quantum "
+                      "of 44.5 N]."),
+    click.option("--sensor-latency", "latency_s", type=Number(0, 1, unit="s"), default=None,
+                 help="From a sample to its reading, 0 or at least one env step (0.01 s), up to "
+                      "1 s [default: 0.01]."),
+    click.option("--sensor-period", "period_s", type=Number(0, 1, lo_open=True, unit="s"),
+                 default=None, help="Sampling period, at least one env step (0.01 s), up to 1 s "
+                                    "[default: 0.01]."),
+    click.option("--sensor-threshold", "threshold_N", type=Number(0, 44.5, hi_open=True, unit="N"),
+                 default=None, help="Readings below it are 0 [default: 0.1 N]."),
+    click.option("--sensor-full-scale", "full_scale_N", type=Number(0, 1000, lo_open=True,
+                                                                    unit="N"),
+                 default=None, help="Saturation of the reading [default: 44.5 N, FlexiForce "
+                                    "A101]."),
+    click.option("--sensor-resolution", "resolution_N", type=Number(0, 100, unit="N"),
+                 default=None, help="Quantum of the reading, 0 for none [default: 44.5/1024 N]."),
+    click.option("--sensor-hysteresis", "hysteresis_pct", type=Number(0, 50, unit="%"),
+                 default=None, help="Hysteresis band in % of full scale, 0-50 [default: 0; the "
+                                    "A101's datasheet bound is 4.5]."),
+)
+
+
+def sensor_spec_of(**given):
+    """The SensorSpec of the handshake's ``--sensor-*`` flags (unset: the defaults)."""
+    from dataclasses import replace
+
+    from softhand.sensors.device import FLEXIFORCE_A101
+
+    values = {k: v for k, v in given.items() if v is not None}
+    try:
+        return replace(FLEXIFORCE_A101, **values)
+    except ValueError as exc:
+        bad(sensor_flag_message(str(exc)))
+
+
+def sensor_flag_message(msg: str) -> str:
+    """A SensorSpec message with its field named by the flag that sets it."""
+    for key, flag in SENSOR_FLAGS.items():
+        msg = msg.replace(f"sensor {key}", flag)
+    return msg
+
+
+def parse_placement_items(items: tuple[str, ...]):
+    """``--sensor-placement [REGION=]PLACEMENT`` items: one placement, or region overrides."""
+    if not items:
+        return None
+    out: dict[str, str] = {}
+    every = None
+    for item in items:
+        region, sep, placement = item.rpartition("=")
+        if sep and (not region.strip() or not placement.strip()):
+            bad(f"--sensor-placement {item!r}: expected [REGION=]PLACEMENT (e.g. Palm1=bone)")
+        if sep:
+            out[region.strip()] = placement.strip()
+        else:
+            every = placement.strip()
+    if every is None:
+        return out
+    from softhand.hands.prosthetic import paper_regions
+
+    return {r: out.get(r, every) for r in paper_regions()}

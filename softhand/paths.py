@@ -8,6 +8,7 @@ name               folder                                      written by / read
 =================  ==========================================  ============================
 ``FE_DIR``         ``calibration/fe`` (+ ``speed-5``, ``-2``)  ``fe sweep`` / ``calibrate``
 ``SKINS_DIR``      ``calibration/skins``                       ``calibrate`` / hands, envs
+``SENSORS_DIR``    ``calibration/sensors`` (+ ``fe``)          ``sensors calibrate`` / envs
 ``REPORTS_DIR``    ``reports``                                 ``bench *``
 =================  ==========================================  ============================
 
@@ -24,7 +25,8 @@ import os
 from importlib import resources
 from pathlib import Path
 
-__all__ = ["CALIBRATION_DIR", "FE_DIR", "IN_CHECKOUT", "REPORTS_DIR", "REPO_ROOT", "SKINS_DIR",
+__all__ = ["CALIBRATION_DIR", "FE_DIR", "IN_CHECKOUT", "REPORTS_DIR", "REPO_ROOT", "SENSORS_DIR",
+           "SKINS_DIR",
            "is_shipped"]
 
 def _calibration_dir() -> Path:
@@ -38,6 +40,7 @@ IN_CHECKOUT = (REPO_ROOT / "pyproject.toml").is_file()
 CALIBRATION_DIR = _calibration_dir()
 FE_DIR = CALIBRATION_DIR / "fe"
 SKINS_DIR = CALIBRATION_DIR / "skins"
+SENSORS_DIR = CALIBRATION_DIR / "sensors"
 REPORTS_DIR = REPO_ROOT / "reports" if IN_CHECKOUT else Path("reports")
 
 

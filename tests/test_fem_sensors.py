@@ -138,8 +138,8 @@ def test_design_table_row_has_the_pocket_dead_band_and_the_relaxation():
     """softhand bench sensors' row for one design (2D here): the floor's dead band brackets the
     plate force at which the pocket closed; every reading relaxes in the hold, the bone's more
     than the plate force (the load moves outward as the PU relaxes: 2D 32 % against 14 % over
-    2 s; 3D 31 % against 20 % over 10 s); the Markdown names the columns."""
-    from softhand.bench.sensors import _markdown, sensor_row
+    2 s; 3D 31 % against 20 % over 10 s)."""
+    from softhand.bench.sensors import sensor_row
 
     row = sensor_row("pocket2-pu", IndentationSettings(mode="2d", hold_s=2.0))
     floor = row["sensors"]["pocket-floor"]
@@ -147,7 +147,3 @@ def test_design_table_row_has_the_pocket_dead_band_and_the_relaxation():
     assert 0.0 <= lo < hi < row["plate_N"]
     assert all(s["relaxation_pct"] > 0.0 for s in row["sensors"].values())
     assert row["sensors"]["bone"]["relaxation_pct"] > row["plate_relaxation_pct"] > 0.0
-    md = _markdown({"machine": {"platform": "x", "cpus": 2, "python": "3", "mujoco": "4"},
-                    "hold_s": 2.0, "designs": {"pocket2-pu": {**row,
-                                                               "lifelike_distance_pct": 30.0}}})
-    assert "| pocket2-pu | 30 |" in md and "floor dead band N" in md

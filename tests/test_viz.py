@@ -59,6 +59,8 @@ def synthetic_frames(model: mujoco.MjModel, n: int) -> HandshakeFrames:
         skin_designs={r: ("rigid" if r.startswith("Back") else "pocket2-sil") for r in REGIONS},
         contacts=contacts,
         phase=[phases[4 * i // n] for i in range(n)],
+        sensor_reading_N=0.35 * forces,
+        sensor_placements=dict.fromkeys(REGIONS, "interface"),
     )
 
 
@@ -86,6 +88,15 @@ def test_file_is_complete_and_alone(recorded, summary):
 def test_region_force_series(summary):
     for region in REGIONS:
         entry = summary["entities"][f"forces/{region}"]
+        assert "Scalars:scalars" in entry["temporal"]
+        assert entry["sim_time_points"] == N_FRAMES
+
+
+def test_sensor_series_beside_the_forces(summary):
+    """Each region's embedded-sensor reading is its own series, in its own view beside the
+    forces' (the blueprint)."""
+    for region in REGIONS:
+        entry = summary["entities"][f"sensors/{region}"]
         assert "Scalars:scalars" in entry["temporal"]
         assert entry["sim_time_points"] == N_FRAMES
 
@@ -166,6 +177,7 @@ def test_bad_input_for_the_model_raises(model, tmp_path):
         region_names=few,
         region_force_N=frames.region_force_N[:, :-1],
         skin_designs={r: "rigid" for r in few},
+        sensor_reading_N=frames.sensor_reading_N[:, :-1],
     )
     with pytest.raises(ValueError, match=r"region_names: 17 regions.*missing \['Back2'\]"):
         record_handshake(tmp_path / "a.rrd", model, wrong)

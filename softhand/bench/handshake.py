@@ -48,7 +48,8 @@ REPRESENTATION_DESIGNS = ("pocket2-sil", "pocket2-pu")  # a silicone and a polyu
 def frames_of(run: HandshakeRun) -> HandshakeFrames:
     """What a recording of ``run`` holds."""
     return HandshakeFrames(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat, run.region_force_N,
-                           run.region_names, run.skins, run.contacts, run.phase)
+                           run.region_names, run.skins, run.contacts, run.phase,
+                           run.sensor_reading_N, run.sensor_placements)
 
 
 def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:

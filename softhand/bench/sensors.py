@@ -1,13 +1,23 @@
-"""Embedded sensors of the 12 designs side by side (``softhand bench sensors``): a table a skin
-designer can act on.
+"""Embedded sensors of the 12 designs, and on the hand (``softhand bench sensors``).
 
-For each design, one FE ramp to 2 N at 0.5 mm/s and a 10 s hold (3D, default mesh, the default
-4 x 4 mm patches of :mod:`softhand.fem.sensors`) gives, per placement: the sensitivity (the
-patch's reading per newton on the plate at 2 N), the pocket floor's dead band (the plate force
-between the last step the floor read 0 and the first it read more, bounded by the FE's steps),
-and how much the reading relaxes over the hold (against the plate force's own relaxation); next to
-the design's lifelike distance from the human phalanx (``calibration/skins/index.json``).
-Written to ``reports/bench-sensors.{json,md}``.
+1. **Design table** (from the shipped records and transfer laws, ``calibration/sensors``; no FE
+   run): per design and placement the sensitivity (the patch's reading per newton on the plate at
+   2 N), the pocket floor's dead band (the transfer law's F_0, inside the FE's bracket), how much
+   the reading relaxes over the 10 s hold at 20 N (against the plate force's own relaxation), the
+   transfer law's fit error, next to the design's lifelike distance from the human phalanx
+   (``calibration/skins/index.json``). A placement is **useful** when its sensitivity is at least
+   0.1 N/N (a 10-bit FlexiForce A101, 0.043 N per quantum, then resolves 0.43 N of load), its dead
+   band at most 0.5 N (a fifth of the partner's 2.5 N grip) and its reading relaxes by at most
+   10 % in the hold: named criteria, not the paper's.
+2. **Transfer curves** (``bench-sensors.png``): reading against load on the 0.5 mm/s ramp, FE
+   points and law, per placement.
+3. **Handshake** (default scene, seed 0): per region the contact force beside the sensor's
+   reading, under the outer layer and on the pocket floor.
+4. **Controllers on sensor readings**: the force controller (2.5 N and 0.3 N targets) and the
+   neutral controller (touch at 0.3 N) fed the true contact forces or the sensors' calibrated
+   read-out, on the interface and on the pocket floor: what a pocket's dead band does to them.
+
+Written to ``reports/bench-sensors.{json,md,png}``.
 """
 
 from __future__ import annotations
@@ -20,78 +30,232 @@ import numpy as np
 
 from softhand.bench.common import machine_info, machine_line
 from softhand.fem import solver
-from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import IndentationSettings
 from softhand.io import atomic_write_json, atomic_write_text
-from softhand.paths import REPORTS_DIR, SKINS_DIR
+from softhand.paths import REPORTS_DIR, SENSORS_DIR, SKINS_DIR
+from softhand.sensors.transfer import SensorRecord, record_from_result
 
-__all__ = ["run_sensor_table", "sensor_row"]
+__all__ = ["record_row", "run_sensor_table", "sensor_row"]
 
-HOLD_S = 10.0
+PLACEMENT_ORDER = ("bone", "interface", "pocket-floor")
+USEFUL = {"sensitivity_min": 0.1, "dead_band_max_N": 0.5, "relaxation_max_pct": 10.0}
+AT_N = 2.0
+HANDSHAKE_DESIGN = "pocket2-sil"
 
 
-def sensor_row(design: str, settings: IndentationSettings | None = None) -> dict[str, Any]:
-    """One design's sensors: per placement sensitivity, dead band (pocket floor) and relaxation."""
-    r = solver.indent(design, settings or IndentationSettings(hold_s=HOLD_S))
-    end = int(np.flatnonzero(~r.hold)[-1])
-    row: dict[str, Any] = {"plate_N": float(r.force_N[end]),
-                           "plate_relaxation_pct": float(100 * (1 - r.force_N[-1] / r.force_N[end])),
-                           "wall_s": r.wall_s, "sensors": {}}
-    for name, v in r.embedded_sensors.items():
-        f = np.asarray(v["force_N"])
-        on = np.flatnonzero(f > 0)
+def record_row(rec: SensorRecord) -> dict[str, Any]:
+    """Per placement: sensitivity at 2 N of plate force, the FE's dead-band bracket (pocket
+    floor), the reading's relaxation over the hold; the plate's own relaxation."""
+    end = rec.peak_index
+    ramp = slice(0, end + 1)
+    f = rec.force_N[ramp]
+    row: dict[str, Any] = {"plate_N": float(rec.force_N[end]),
+                           "plate_relaxation_pct": float(100 * (1 - rec.force_N[-1] / rec.force_N[end])),
+                           "sensors": {}}
+    for name, reading in rec.readings_N.items():
+        r = reading
+        at = float(np.interp(AT_N, f, r[ramp])) if f[-1] >= AT_N else float(r[end])
+        on = np.flatnonzero(r > 1e-9)
         dead = None
-        if v["placement"] == "pocket-floor" and on.size:
-            dead = [float(r.force_N[on[0] - 1]), float(r.force_N[on[0]])]
+        if rec.placements[name] == "pocket-floor" and on.size:
+            dead = [float(rec.force_N[on[0] - 1]), float(rec.force_N[on[0]])]
         row["sensors"][name] = {
-            "placement": v["placement"], "area_mm2": v["area_mm2"], "at_2N": float(f[end]),
-            "sensitivity": float(f[end] / r.force_N[end]), "dead_band_N": dead,
-            "relaxation_pct": float(100 * (1 - f[-1] / f[end])) if f[end] > 0 else None}
+            "placement": rec.placements[name], "area_mm2": rec.area_mm2[name],
+            "sensitivity": at / min(AT_N, float(f[-1])), "dead_band_N": dead,
+            "relaxation_pct": float(100 * (1 - r[-1] / r[end])) if r[end] > 0 else None}
     return row
 
 
-def run_sensor_table(out_dir: str | Path = REPORTS_DIR, *,
-                     designs: tuple[str, ...] = tuple(DESIGNS)) -> str:
-    """Run every design, write ``bench-sensors.json`` and ``.md``, return the Markdown."""
-    life = {}
+def sensor_row(design: str, settings: IndentationSettings | None = None) -> dict[str, Any]:
+    """:func:`record_row` of one FE run of ``design`` (default: to 2 N, 10 s hold)."""
+    r = solver.indent(design, settings or IndentationSettings(hold_s=10.0))
+    return {**record_row(record_from_result(r)), "wall_s": r.wall_s}
+
+
+def _lifelike() -> dict[str, float]:
     index = Path(SKINS_DIR) / "index.json"
-    if index.exists():
-        life = {r["name"]: r["distance_pct"]
-                for r in json.loads(index.read_text(encoding="utf-8"))["lifelike"]}
-    data = {"machine": machine_info(), "hold_s": HOLD_S,
-            "designs": {d: {**sensor_row(d), "lifelike_distance_pct": life.get(d)}
-                        for d in designs}}
+    if not index.exists():
+        return {}
+    return {r["name"]: r["distance_pct"]
+            for r in json.loads(index.read_text(encoding="utf-8"))["lifelike"]}
+
+
+def design_table(root: str | Path = SENSORS_DIR, designs: tuple[str, ...] | None = None
+                 ) -> dict[str, Any]:
+    """The design table from the shipped records and transfer laws (module docstring, 1)."""
+    from softhand.sensors.calibrate import load_transfer_laws, read_records
+
+    laws = load_transfer_laws(Path(root) / "transfer.json")
+    life = _lifelike()
+    out = {}
+    for design in designs or sorted({d for d, _ in laws}):
+        fit, _ = read_records(root, design)
+        row = record_row(fit[0])
+        for s in row["sensors"].values():
+            law = laws[(design, s["placement"])]
+            s["law_dead_band_N"] = law.dead_band_N
+            s["fit_rms_pct"] = law.fitted[0].rms_pct
+            s["validation_rms_pct"] = law.validated[0].rms_pct if law.validated else None
+            s["useful"] = bool(
+                s["sensitivity"] >= USEFUL["sensitivity_min"]
+                and law.dead_band_N <= USEFUL["dead_band_max_N"]
+                and (s["relaxation_pct"] or 0.0) <= USEFUL["relaxation_max_pct"])
+        out[design] = {**row, "lifelike_distance_pct": life.get(design)}
+    return out
+
+
+def plot_transfer_curves(root: str | Path, path: Path) -> None:
+    """Reading against load on the 0.5 mm/s ramp: FE points and law, one panel per placement."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softhand.sensors.calibrate import load_transfer_laws, read_records
+
+    laws = load_transfer_laws(Path(root) / "transfer.json")
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
+    designs = sorted({d for d, _ in laws})
+    colours = plt.cm.tab20(np.linspace(0, 1, len(designs)))
+    for ax, placement in zip(axes, PLACEMENT_ORDER, strict=True):
+        for c, design in zip(colours, designs, strict=True):
+            law = laws.get((design, placement))
+            if law is None:
+                continue
+            rec = read_records(root, design)[0][0]
+            name = next(n for n, p in rec.placements.items() if p == placement)
+            ramp = ~rec.hold
+            ax.plot(rec.force_N[ramp], rec.readings_N[name][ramp], "o", ms=2.5, color=c)
+            ax.plot(rec.force_N[ramp], law.reading(rec.time_s, rec.force_N)[ramp], "-",
+                    color=c, lw=1, label=design)
+        ax.set_title(f"{placement} (4 x 4 mm patch)")
+        ax.set_xlabel("load on the skin (plate force), N")
+        ax.set_ylabel("sensor reading, N on the patch")
+        ax.set_xlim(0, 20)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2)
+    fig.suptitle("Transfer curves of the embedded sensors: FE (points) and fitted laws (lines), "
+                 "0.5 mm/s ramp")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
+
+
+def _handshake(placement: str, controller: str = "neutral", signal: str = "contact",
+               design: str = HANDSHAKE_DESIGN, **settings) -> dict[str, Any]:
+    from softhand.envs.run import run_handshake
+
+    run = run_handshake(design=design, controller=controller, signal=signal,
+                        sensor_placement=placement, controller_settings=settings)
+    table = run.table()
+    grip = np.array([p in ("grip", "shake") for p in run.phase])
+    digits = ("Index", "Middle", "Ring", "Little")
+    held = [float(np.max([run.region_force_N[grip, i] for i, r in enumerate(run.region_names)
+                          if r.startswith(d)], axis=0).mean()) for d in digits]
+    return {"regions": table, "digit_mean_held_N": dict(zip(digits, held, strict=True)),
+            "steps_per_s": run.steps / run.wall_s}
+
+
+def run_sensor_table(out_dir: str | Path = REPORTS_DIR, *, root: str | Path = SENSORS_DIR,
+                     designs: tuple[str, ...] | None = None, handshakes: bool = True) -> str:
+    """Write ``bench-sensors.json``, ``.md`` and ``.png``; return the Markdown."""
+    from softhand.paper import paper
+
     out = Path(out_dir)
+    data: dict[str, Any] = {"machine": machine_info(), "useful": USEFUL,
+                            "designs": design_table(root, designs)}
+    plot_transfer_curves(root, out / "bench-sensors.png")
+    if handshakes:
+        data["fig4_regions"] = list(paper()["handshake"]["over_2N"])
+        data["handshake"] = {p: _handshake(p) for p in ("interface", "pocket-floor")}
+        runs = {}
+        for label, ctrl, signal, placement, kw in (
+                ("force 2.5 N, contact", "force", "contact", "interface", {}),
+                ("force 2.5 N, sensor interface", "force", "sensor", "interface", {}),
+                ("force 2.5 N, sensor pocket floor", "force", "sensor", "pocket-floor", {}),
+                ("force 0.3 N, contact", "force", "contact", "interface", {"target_N": 0.3}),
+                ("force 0.3 N, sensor interface", "force", "sensor", "interface",
+                 {"target_N": 0.3}),
+                ("force 0.3 N, sensor pocket floor", "force", "sensor", "pocket-floor",
+                 {"target_N": 0.3}),
+                ("neutral, contact", "neutral", "contact", "interface", {}),
+                ("neutral, sensor interface", "neutral", "sensor", "interface", {}),
+                ("neutral, sensor pocket floor", "neutral", "sensor", "pocket-floor", {})):
+            runs[label] = {"controller": ctrl, "signal": signal, "placement": placement, **kw,
+                           **_handshake(placement, ctrl, signal, **kw)}
+        data["controllers"] = runs
     atomic_write_json(out / "bench-sensors.json", data)
     md = _markdown(data)
     atomic_write_text(out / "bench-sensors.md", md)
     return md
 
 
+def _f(v, fmt: str = ".2f") -> str:
+    return "-" if v is None else format(v, fmt)
+
+
 def _markdown(d: dict[str, Any]) -> str:
-    lines = ["# Embedded sensors of the designs (`softhand bench sensors`)", "",
-             f"{machine_line(d['machine'])} 3D FE, default mesh, 0.5 mm/s to 2 N, "
-             f"{d['hold_s']:g} s hold; 4 x 4 mm patches under the indenter (reading per newton on "
-             "the plate at 2 N; relaxation of the reading over the hold, the plate's in the "
-             "third column).", "",
+    lines = ["# Embedded sensors (`softhand bench sensors`)", "",
+             f"{machine_line(d['machine'])}", "",
+             "## The designs", "",
+             "Shipped records (3D FE, default mesh, 0.5 mm/s to 20 N, 10 s hold; 4 x 4 mm patches "
+             "under the indenter) and transfer laws (`calibration/sensors`). Sensitivity: reading "
+             "per newton on the plate at 2 N. Relaxation: of the reading over the hold at 20 N "
+             "(the plate's own in the third column). Useful (u): sensitivity >= "
+             f"{d['useful']['sensitivity_min']} N/N, dead band <= "
+             f"{d['useful']['dead_band_max_N']} N, reading relaxes <= "
+             f"{d['useful']['relaxation_max_pct']:g} %.", "",
              "| design | lifelike distance % | plate relaxes % | bone N/N | under the outer layer "
-             "N/N | pocket floor N/N | floor dead band N | reading relaxes, bone / layer / floor % |",
-             "|---|---|---|---|---|---|---|---|"]
+             "N/N | pocket floor N/N | floor dead band N (FE bracket) | reading relaxes, bone / "
+             "layer / floor % | law RMS error, fit / 2 mm/s, % of span (worst placement) | "
+             "useful placements |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     rows = sorted(d["designs"].items(),
                   key=lambda kv: (kv[1]["lifelike_distance_pct"] is None,
                                   kv[1]["lifelike_distance_pct"] or 0.0))
     for name, r in rows:
-        s = r["sensors"]
+        s = {v["placement"]: v for v in r["sensors"].values()}
         floor = s.get("pocket-floor")
-        life = r["lifelike_distance_pct"]
-        dead = (f"{floor['dead_band_N'][0]:.2f}-{floor['dead_band_N'][1]:.2f}"
-                if floor and floor["dead_band_N"] else "-")
-        fs = "-" if floor is None else f"{floor['sensitivity']:.2f}"
-        relax = " / ".join("-" if s.get(k) is None or s[k]["relaxation_pct"] is None
-                           else f"{s[k]['relaxation_pct']:.1f}"
-                           for k in ("bone", "interface", "pocket-floor"))
-        lines.append(f"| {name} | {'-' if life is None else f'{life:.0f}'} | "
+        dead = (f"{floor['law_dead_band_N']:.2f} ({floor['dead_band_N'][0]:.2f}-"
+                f"{floor['dead_band_N'][1]:.2f})" if floor and floor["dead_band_N"] else "-")
+        relax = " / ".join("-" if k not in s or s[k]["relaxation_pct"] is None
+                           else f"{s[k]['relaxation_pct']:.1f}" for k in PLACEMENT_ORDER)
+        fit = max(v["fit_rms_pct"] for v in s.values())
+        val = max((v["validation_rms_pct"] or 0.0) for v in s.values())
+        useful = ", ".join(k for k in PLACEMENT_ORDER if k in s and s[k]["useful"]) or "none"
+        lines.append(f"| {name} | {_f(r['lifelike_distance_pct'], '.0f')} | "
                      f"{r['plate_relaxation_pct']:.1f} | {s['bone']['sensitivity']:.3f} | "
                      f"{s['interface']['sensitivity']:.2f} | "
-                     f"{fs} | {dead} | {relax} |")
+                     f"{_f(floor['sensitivity'] if floor else None)} | {dead} | {relax} | "
+                     f"{fit:.2f} / {val:.2f} | {useful} |")
+    lines += ["", "Transfer curves: `bench-sensors.png`.", ""]
+    if "handshake" in d:
+        regions = d["fig4_regions"]
+        lines += ["## Handshake with the sensor model", "",
+                  f"Default scene ({HANDSHAKE_DESIGN} everywhere, neutral controller, seed 0), "
+                  "FlexiForce A101 electronics; the paper's regions over 2 N (Fig. 4). Contact: "
+                  "the true normal force; sensor: the reading, N on the patch.", "",
+                  "| region | contact peak / mean N | interface sensor peak / mean N | "
+                  "pocket-floor sensor peak / mean N |", "|---|---|---|---|"]
+        hs = d["handshake"]
+        for r in regions:
+            c = hs["interface"]["regions"][r]
+            f = hs["pocket-floor"]["regions"][r]
+            lines.append(f"| {r} | {c['peak_N']:.2f} / {c['mean_N']:.2f} | "
+                         f"{c['sensor_peak']:.2f} / {c['sensor_mean']:.2f} | "
+                         f"{f['sensor_peak']:.2f} / {f['sensor_mean']:.2f} |")
+        lines += ["", "## Controllers on sensor readings", "",
+                  f"{HANDSHAKE_DESIGN} everywhere, seed 0. The feedback is the true contact "
+                  "force, or the sensors' calibrated read-out (the transfer law inverted; "
+                  "nothing inside a dead band). Held force: the mean over the grip and shake of "
+                  "each finger's most loaded region.", "",
+                  "| controller, feedback | held force index / middle / ring / little N | "
+                  "Index3 peak N | Palm1 peak N |", "|---|---|---|---|"]
+        for label, v in d["controllers"].items():
+            held = " / ".join(f"{x:.2f}" for x in v["digit_mean_held_N"].values())
+            lines.append(f"| {label} | {held} | {v['regions']['Index3']['peak_N']:.2f} | "
+                         f"{v['regions']['Palm1']['peak_N']:.2f} |")
     return "\n".join(lines) + "\n"

@@ -14,6 +14,11 @@ thumb flexion, thumb rotation; positive closes):
   that posture (the motors are not back-drivable) until the partner lets go; the thumb is not
   rotated into opposition, it closes over the back of the partner's hand. The default of
   ``softhand handshake``, since it is the scenario of the paper's Fig. 4.
+
+The force-feedback controllers take ``signal``: ``contact`` (default) feeds them the true region
+forces (``info["region_forces_N"]``), ``sensor`` what the embedded sensors let a calibrated
+read-out infer (``info["sensor_load_estimate_N"]``: the transfer law inverted, with the sensor's
+latency, noise, threshold and quantization, and nothing inside a pocket's dead band).
 """
 
 from __future__ import annotations
@@ -24,7 +29,16 @@ import numpy as np
 
 from softhand.hands.constants import PARTNER
 
-__all__ = ["CONTROLLERS", "ForceRegulating", "Neutral", "OpenLoopClose", "make_controller"]
+__all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClose",
+           "make_controller"]
+
+#: what a force-feedback controller reads: the true contact forces, or the embedded sensors
+SIGNALS = {"contact": "region_forces_N", "sensor": "sensor_load_estimate_N"}
+
+
+def _check_signal(signal: str) -> None:
+    if signal not in SIGNALS:
+        raise ValueError(f"signal = {signal!r} is unknown; allowed: {', '.join(SIGNALS)}")
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 _GRIPPING = ("grip", "shake")
@@ -79,8 +93,10 @@ class ForceRegulating:
 
     target_N: float = 2.5
     gain_per_N: float = 0.5
+    signal: str = "contact"
 
     def __post_init__(self) -> None:
+        _check_signal(self.signal)
         if not self.target_N > 0:
             raise ValueError(f"target_N = {self.target_N!r} must be > 0")
         if not self.gain_per_N > 0:
@@ -91,7 +107,7 @@ class ForceRegulating:
         if info["phase"] not in _GRIPPING:
             a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
             return a
-        forces = info["region_forces_N"]
+        forces = info[SIGNALS[self.signal]]
         for i, digit in enumerate(_DIGITS):
             f = max(v for k, v in forces.items() if k.startswith(digit))
             a[i] = np.clip(self.gain_per_N * (self.target_N - f), -1.0, 1.0)
@@ -108,8 +124,10 @@ class Neutral:
 
     speed: float = 0.5
     touch_N: float = 0.3
+    signal: str = "contact"
 
     def __post_init__(self) -> None:
+        _check_signal(self.signal)
         if not 0 < self.speed <= 1:
             raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
         if not self.touch_N > 0:
@@ -122,7 +140,7 @@ class Neutral:
             self._held[:] = False
             a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
             return a
-        forces = info["region_forces_N"]
+        forces = info[SIGNALS[self.signal]]
         for i, digit in enumerate(_DIGITS):
             touching = max(v for k, v in forces.items() if k.startswith(digit)) > self.touch_N
             self._held[i] |= touching
@@ -134,8 +152,12 @@ class Neutral:
 CONTROLLERS = {"neutral": Neutral, "open-loop": OpenLoopClose, "force": ForceRegulating}
 
 
-def make_controller(name: str):
-    """``neutral``, ``open-loop`` or ``force`` with default settings."""
+def make_controller(name: str, signal: str = "contact", **settings):
+    """``neutral``, ``open-loop`` or ``force``, fed ``signal`` (the feedback controllers; the open
+    loop reads nothing), with ``settings`` (e.g. ``target_N``) over the defaults."""
     if name not in CONTROLLERS:
         raise ValueError(f"controller {name!r} is unknown; allowed: {', '.join(CONTROLLERS)}")
-    return CONTROLLERS[name]()
+    _check_signal(signal)
+    if name != "open-loop":
+        settings["signal"] = signal
+    return CONTROLLERS[name](**settings)

@@ -18,6 +18,7 @@ from gymnasium import spaces
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
 from softhand.envs.physics import MujocoPhysics
+from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
 from softhand.envs.skins import (
     CalibratedRangeWarning,
     calibrated_max_force,
@@ -35,6 +36,7 @@ from softhand.hands import (
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
 from softhand.hands.constants import PARTNER
+from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
@@ -78,16 +80,29 @@ class HandshakeEnv(gym.Env):
     ===== ====================================== =====
 
     Observation space: ``Box(-inf, inf, (2 n + 19,), float64)`` with n the prosthetic hand's
-    joints (16 by default):
+    joints (16 by default); ``(2 n + 37,)`` with ``observe="both"``:
 
     ================= ====================================================== ======
     slice             quantity                                                unit
     ================= ====================================================== ======
     [0, n)            prosthetic joint positions                             rad
     [n, 2n)           prosthetic joint velocities                            rad/s
-    [2n, 2n + 18)     normal contact force per region, in the order above    N
-    2n + 18           time since the start / handshake duration              1
+    [2n, 2n + 18)     per region, in the order above: its embedded sensor's   N
+                      reading (``observe="sensor"``, the default), or its
+                      true normal contact force (``observe="contact"``)
+    [2n + 18, 2n+36)  ``observe="both"`` only: the true contact forces       N
+    last              time since the start / handshake duration              1
     ================= ====================================================== ======
+
+    Embedded sensors (:mod:`softhand.envs.sensing`): each region's sensor sits under its skin at
+    ``sensor_placement`` (default ``interface``, under the outer layer; ``bone``;
+    ``pocket-floor`` for pocketed designs; skins without an FE model get an ideal ``surface``
+    sensor) and reads the force on its 4 x 4 mm patch (N): the design's transfer law of the
+    region's contact force (calibration/sensors/transfer.json: sensitivity, the pocket's dead
+    band, the reading's relaxation), then ``sensor``'s electronics (:class:`SensorSpec`, default
+    a FlexiForce A101 with a 10-bit ADC at 100 Hz: latency, seeded noise, threshold, saturation,
+    quantization, optional hysteresis), resolved to the env step (frame_skip x timestep_s).
+    The reward uses the true contact forces.
 
     Reward (weights are constructor arguments, defaults in ``DEFAULT_REWARD_WEIGHTS``):
 
@@ -107,7 +122,10 @@ class HandshakeEnv(gym.Env):
     controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
     error against 0.5 ms for each timestep).
 
-    ``info``: ``region_forces_N`` (dict region -> N), ``phase`` (reach, grip, shake, release,
+    ``info``: ``region_forces_N`` (dict region -> N, the true contact forces, always),
+    ``sensor_readings_N`` (dict region -> N on the sensor patch), ``sensor_load_estimate_N``
+    (dict region -> N: the load a calibrated read-out infers from the reading by inverting the
+    transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
 
     Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
@@ -146,6 +164,12 @@ class HandshakeEnv(gym.Env):
         calibration_dir: folder of the skin calibration files (default: the shipped ones); every
             skin used is read and checked before the scene is built.
         randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
+        sensor: the sensors' electronics (default :data:`FLEXIFORCE_A101`); the noise is drawn
+            from the episode's seed.
+        sensor_placement: one placement for every region, or a mapping region -> placement
+            (the rest ``interface``).
+        observe: ``sensor`` (default), ``contact`` or ``both`` (see the observation space).
+        sensor_dir: folder of ``transfer.json`` (default: the shipped ``calibration/sensors``).
 
     Raises:
         ValueError: at construction, a bad argument or calibration file, naming it and the
@@ -167,7 +191,10 @@ class HandshakeEnv(gym.Env):
                  representation: str | None = None, frame_skip: int | None = None,
                  timestep_s: float = DEFAULT_TIMESTEP_S, squeeze: float = 1.0,
                  overload_N: float = 10.0, reward_weights: Mapping[str, float] | None = None,
-                 calibration_dir: str | Path | None = None, randomize: bool = True) -> None:
+                 calibration_dir: str | Path | None = None, randomize: bool = True,
+                 sensor: SensorSpec | None = None,
+                 sensor_placement: str | Mapping[str, str] | None = None,
+                 observe: str = "sensor", sensor_dir: str | Path | None = None) -> None:
         # every argument (and every calibration file used) is checked before any work is done
         self.config = SceneConfig(timestep_s=timestep_s)  # checks the timestep
         timestep_s = self.config.timestep_s
@@ -191,6 +218,16 @@ class HandshakeEnv(gym.Env):
         self.weights = weights
         self.skins, self.representations = parse_skins(design, skins, representation)
         self.frame_skip = int(frame_skip)
+        if observe not in OBSERVE:
+            raise ValueError(f"observe = {show(observe)}: allowed {', '.join(OBSERVE)}")
+        self.observe = observe
+        spec = FLEXIFORCE_A101 if sensor is None else sensor
+        if not isinstance(spec, SensorSpec):
+            raise ValueError(f"sensor = {show(sensor)}: expected a SensorSpec")
+        placements = parse_placements(tuple(self.skins), sensor_placement)
+        laws, self.sensor_placements = region_laws(self.skins, placements, sensor_dir)
+        #: the regions' embedded sensors: transfer laws, then the electronics
+        self.sensors = SensorChain(laws, spec, self.frame_skip * timestep_s)
         self.randomize = bool(randomize)
         directory = calibration_dir or SKINS_DIR
         self.calibration_dir = str(directory)  # where the skins' laws came from
@@ -241,7 +278,8 @@ class HandshakeEnv(gym.Env):
         self._warned: set[str] = set()
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (2 * n + 19,), np.float64)
+        self._n_obs = 2 * n + 19 + (18 if observe == "both" else 0)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (self._n_obs,), np.float64)
         self._timeline = Timeline()
         self._script: PartnerScript | None = None
         self._ended: str | None = None  # why the episode ended ("truncated", "terminated")
@@ -275,6 +313,9 @@ class HandshakeEnv(gym.Env):
         self._step_index = 0
         self.physics.reset(start, quat)
         self._forces = np.zeros(len(self.region_names))
+        # the sensors' noise: its own stream, drawn after the partner's (which it leaves as is)
+        self.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
+        self._readings = self.sensors.reading
         self._saturated = 0
         self._beyond = 0
         self._warned = set()
@@ -318,6 +359,7 @@ class HandshakeEnv(gym.Env):
         physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
         self._step_index = end
         self._forces = physics.region_forces()
+        self._readings = self.sensors.step(self._forces)
         self._saturated = physics.saturated_sensors()
         self._check_range()
         d = self.data
@@ -329,7 +371,7 @@ class HandshakeEnv(gym.Env):
         truncated = d.time >= script.timeline.total_s - 1e-9
         info = self._info(terms, phase)
         info["unstable"] = unstable
-        obs = self._obs() if not unstable else np.zeros(self.observation_space.shape)
+        obs = self._obs() if not unstable else np.zeros(self._n_obs)
         truncated = bool(truncated and not unstable)
         if unstable or truncated:
             self._ended = "terminated" if unstable else "truncated"
@@ -352,10 +394,12 @@ class HandshakeEnv(gym.Env):
     def _obs(self) -> np.ndarray:
         total = self._script.timeline.total_s if self._script else self._timeline.total_s
         n = self._pro_qpos.size
-        obs = np.empty(2 * n + 19)
+        obs = np.empty(self._n_obs)
         obs[:n] = self._qpos[self._pro_qpos]
         obs[n:2 * n] = self._qvel[self._pro_dof]
-        obs[2 * n:-1] = self._forces
+        obs[2 * n:2 * n + 18] = self._forces if self.observe == "contact" else self._readings
+        if self.observe == "both":
+            obs[2 * n + 18:2 * n + 36] = self._forces
         obs[-1] = self.data.time / total
         return obs
 
@@ -374,7 +418,11 @@ class HandshakeEnv(gym.Env):
         return terms
 
     def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:
-        return {"region_forces_N": dict(zip(self.region_names, self._forces.tolist(), strict=True)),
+        names = self.region_names
+        estimate = self.sensors.bank.load_estimate(self._readings)
+        return {"region_forces_N": dict(zip(names, self._forces.tolist(), strict=True)),
+                "sensor_readings_N": dict(zip(names, self._readings.tolist(), strict=True)),
+                "sensor_load_estimate_N": dict(zip(names, estimate.tolist(), strict=True)),
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
                 "partner_grip_N": self._script.grip_force_N if self._script else None,
                 "saturated_sensors": self._saturated,

@@ -50,6 +50,12 @@ class HandshakeRun:
     pad_force_N: np.ndarray | None = None
     representations: dict[str, str] = field(default_factory=dict)
     calibration_dir: str = ""
+    #: per frame and region: the embedded sensor's reading (N on its patch)
+    sensor_reading_N: np.ndarray | None = None
+    #: per region: the sensor's placement; the electronics (SensorSpec.to_dict)
+    sensor_placements: dict[str, str] = field(default_factory=dict)
+    sensor_spec: dict = field(default_factory=dict)
+    controller: dict = field(default_factory=dict)
 
     def force_accounting(self) -> dict[str, float]:
         """Where the normal force between the hands came from, over the recorded frames.
@@ -162,12 +168,21 @@ class HandshakeRun:
         return out
 
     def table(self) -> dict[str, dict[str, float]]:
-        """Per region: peak and mean force (N) and contact area (mm^2) over the handshake."""
+        """Per region: peak and mean force (N) and contact area (mm^2) over the handshake, and
+        the embedded sensor's peak and mean reading (``sensor_peak``, ``sensor_mean``: N on the
+        sensor's patch) with its placement."""
         f = self.region_force_N
         a = self.region_area_mm2 if self.region_area_mm2 is not None else np.zeros_like(f)
-        return {r: {"peak_N": float(f[:, i].max()), "mean_N": float(f[:, i].mean()),
-                    "peak_area_mm2": float(a[:, i].max()), "mean_area_mm2": float(a[:, i].mean())}
-                for i, r in enumerate(self.region_names)}
+        out = {r: {"peak_N": float(f[:, i].max()), "mean_N": float(f[:, i].mean()),
+                   "peak_area_mm2": float(a[:, i].max()), "mean_area_mm2": float(a[:, i].mean())}
+               for i, r in enumerate(self.region_names)}
+        if self.sensor_reading_N is not None:
+            s = self.sensor_reading_N
+            for i, r in enumerate(self.region_names):
+                out[r].update({"sensor_peak": float(s[:, i].max()),
+                               "sensor_mean": float(s[:, i].mean()),
+                               "sensor_placement": self.sensor_placements.get(r, "")})
+        return out
 
     @property
     def over_2n(self) -> list[str]:
@@ -190,6 +205,10 @@ class HandshakeRun:
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
         if self.representations:
             out["representations"] = dict(self.representations)
+        if self.sensor_spec:
+            out["sensor"] = {"units": "N on the sensor patch", **self.sensor_spec}
+        if self.controller:
+            out["controller"] = dict(self.controller)
         relax = self.relaxation()
         if relax:
             out["relaxation"] = relax
@@ -354,23 +373,26 @@ def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float]]:
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
                   controller: str = "neutral", seed: int = 0, record_every: int | None = None,
-                  env: HandshakeEnv | None = None, **env_kwargs) -> HandshakeRun:
+                  env: HandshakeEnv | None = None, signal: str = "contact",
+                  controller_settings: Mapping[str, float] | None = None,
+                  **env_kwargs) -> HandshakeRun:
     """Run one episode; keep every ``record_every``-th physics step for the recording (default:
-    the last step of every action, 100 Hz).
+    the last step of every action, 100 Hz). ``signal`` and ``controller_settings`` go to
+    :func:`~softhand.envs.controllers.make_controller`.
 
     ``env`` is an environment built already (then ``design``, ``skins`` and ``env_kwargs`` are
     not used): the CLI builds it first, so that every input is checked before the episode.
     """
     if env is None:
         env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
-    ctrl = make_controller(controller)
+    ctrl = make_controller(controller, signal, **dict(controller_settings or {}))
     record_every = record_every or env.frame_skip
     obs, info = env.reset(seed=seed)
     m, d = env.model, env.data
     zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc", "sf", "pf")}
+                                                "acc", "sf", "pf", "s")}
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
                   for g in env.region_geoms]
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
@@ -388,6 +410,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["mp"].append(d.mocap_pos.copy())
             frames["mq"].append(d.mocap_quat.copy())
             frames["f"].append([info["region_forces_N"][r] for r in env.region_names])
+            frames["s"].append([info["sensor_readings_N"][r] for r in env.region_names])
             frames["ph"].append(info["phase"])
             area, rigid, rows = areas(d)
             frames["c"].append(rows)
@@ -412,4 +435,8 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                         np.array(frames["r"]), np.array(frames["acc"]), np.array(frames["sf"]),
                         compression if has_pads else None,
                         np.array(frames["pf"]) if has_pads else None,
-                        dict(env.representations), env.calibration_dir)
+                        dict(env.representations), env.calibration_dir,
+                        np.array(frames["s"]), dict(env.sensor_placements),
+                        env.sensors.spec.to_dict(),
+                        {"name": controller, "signal": signal if controller != "open-loop" else
+                         None, **dict(controller_settings or {})})

@@ -13,13 +13,16 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 | ``world/contacts/points`` | Points3D | per frame | contact points, sized and coloured by force |
 | ``world/contacts/normals`` | Arrows3D | per frame | contact normals, ARROW_M_PER_N m per N |
 | ``forces/{region}`` | Scalars | per frame | the region's normal force, N |
+| ``sensors/{region}`` | Scalars | per frame | its embedded sensor's reading, N on the patch (3) |
 | ``skin/designs`` | TextDocument | static | Markdown table: region, body, skin design |
 | ``partner/phase`` | TextLog | at changes | partner phase (``reach``, ``grip``, ...) |
 
 (1) Capsules3D, Ellipsoids3D, Boxes3D, Cylinders3D or Mesh3D (the palm's convex skin and tissue
 pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom: shape and label
 ``{region}: {design}`` static (meshes: no label), colour force_colors(force) per frame.
-``forces/{region}`` also holds a static SeriesLines (its name).
+``forces/{region}`` also holds a static SeriesLines (its name). (3) When the frames carry
+sensor readings; the series is named ``{region} ({placement})`` and its view stands beside the
+forces' view, so that a region's reading and its contact force are read side by side.
 Geom and body names are MuJoCo's (``{body}`` e.g. ``pro_index_proximal``, ``hum_base``); unnamed
 geoms are called ``geom{id}``. Body poses are world poses, so the body entities are flat (not nested
 along the kinematic tree).
@@ -84,6 +87,8 @@ class HandshakeFrames:
         skin_designs: region -> skin design name (e.g. ``"pocket2-sil"``, ``"rigid"``).
         contacts: per frame an (n_i, 7) array: position xyz (m), normal xyz, normal force (N).
         phase: per frame the partner's phase (``"reach"``, ``"grip"``, ...), or None.
+        sensor_reading_N: (T, R) embedded sensor reading per region (N on its patch), or None.
+        sensor_placements: region -> the sensor's placement (labels the series).
     """
 
     time_s: np.ndarray
@@ -95,6 +100,8 @@ class HandshakeFrames:
     skin_designs: dict[str, str]
     contacts: list[np.ndarray]
     phase: list[str] | None = None
+    sensor_reading_N: np.ndarray | None = None
+    sensor_placements: dict[str, str] | None = None
 
     def __post_init__(self) -> None:
         time_s = _checked("time_s", self.time_s, (None,))
@@ -137,6 +144,9 @@ class HandshakeFrames:
             "skin_designs": designs,
             "contacts": contacts,
             "phase": phase,
+            "sensor_reading_N": None if self.sensor_reading_N is None else
+            _checked("sensor_reading_N", self.sensor_reading_N, (n, len(names))),
+            "sensor_placements": dict(self.sensor_placements or {}),
         }
         for key, value in fields.items():
             object.__setattr__(self, key, value)
@@ -261,12 +271,16 @@ def _body_poses(
     return pos, quat
 
 
-def _blueprint() -> rrb.Blueprint:
+def _blueprint(sensors: bool = False) -> rrb.Blueprint:
+    series = rrb.TimeSeriesView(origin="forces", name="region forces (N)")
+    if sensors:
+        series = rrb.Horizontal(series, rrb.TimeSeriesView(
+            origin="sensors", name="embedded sensor readings (N on the patch)"))
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial3DView(origin="world", name="handshake"),
             rrb.Vertical(
-                rrb.TimeSeriesView(origin="forces", name="region forces (N)"),
+                series,
                 rrb.TextDocumentView(origin="skin", name="skin designs"),
                 rrb.TextLogView(origin="partner", name="partner phase"),
             ),
@@ -317,6 +331,13 @@ def _log_recording(
         entity = _path("forces", region)
         log(entity, rr.SeriesLines(names=region), static=True)
         send(entity, time, rr.Scalars.columns(scalars=force))
+    if frames.sensor_reading_N is not None:
+        for k, region in enumerate(frames.region_names):
+            entity = _path("sensors", region)
+            where = frames.sensor_placements.get(region, "")
+            log(entity, rr.SeriesLines(names=f"{region} ({where})" if where else region),
+                static=True)
+            send(entity, time, rr.Scalars.columns(scalars=frames.sensor_reading_N[:, k]))
 
     table = ["| region | body | skin design |", "|---|---|---|"]
     table += [f"| {r} | {info[r].body} | {frames.skin_designs[r]} |" for r in frames.region_names]
@@ -386,7 +407,7 @@ def record_handshake(
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        rec.save(tmp, default_blueprint=_blueprint())
+        rec.save(tmp, default_blueprint=_blueprint(frames.sensor_reading_N is not None))
         _log_recording(rec, model, frames, max_force_N)
         rec.flush()
         rec.disconnect()

@@ -1,0 +1,145 @@
+"""``softhand sensors calibrate``: FE sensor records of the 12 designs and their transfer laws.
+
+Folder layout (``calibration/sensors`` by default)::
+
+    fe/{design}.csv            time_s, force_N (plate), hold, {sensor}_N per patch: 0.5 mm/s
+    fe/speed-2/{design}.csv    the same at 2 mm/s (validation)
+    fe/summary.json            provenance (git revision, solver version, settings), per design
+                               the patches' placements and areas, and sha256 of each record
+    transfer.json              per design and placement the transfer law
+                               (:class:`~softhand.sensors.transfer.TransferLaw`) with its errors,
+                               and the provenance of the records it was fitted to
+
+The FE runs are the shipped skin curves' protocol (:data:`~softhand.sensors.transfer.FE_SETTINGS`)
+with the default 4 x 4 mm patches (:func:`softhand.fem.sensors.default_patches`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, replace
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from softhand import __version__
+from softhand.fem.solver import SOLVER_VERSION
+from softhand.fem.sweep import git_revision, run_sweep
+from softhand.io import atomic_write_json, atomic_write_text
+from softhand.sensors.transfer import (
+    FE_SETTINGS,
+    SPEEDS_MM_S,
+    SensorRecord,
+    TransferLaw,
+    fit_transfer,
+    load_records,
+    record_from_result,
+    records_csv,
+)
+
+__all__ = ["fit_all", "load_transfer_laws", "run_sensor_fe", "speed_dir"]
+
+
+def speed_dir(root: str | Path, speed_mm_s: float) -> Path:
+    """``fe`` for the fitted speed, ``fe/speed-{v}`` for the others."""
+    base = Path(root) / "fe"
+    return base if speed_mm_s == SPEEDS_MM_S[0] else base / f"speed-{speed_mm_s:g}"
+
+
+def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | None = None,
+                  show_progress: bool = True) -> tuple[dict[str, Any], list[str]]:
+    """Run the FE records of ``designs`` at every speed and write them (each file atomically).
+
+    Returns:
+        (the summary written, the designs x speeds that did not finish: interrupted or failed).
+    """
+    out = Path(out_dir)
+    summary_path = out / "fe" / "summary.json"
+    try:
+        summary = json.loads(summary_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        summary = {"designs": {}}
+    summary["provenance"] = {
+        "softhand_version": __version__, "solver_version": SOLVER_VERSION,
+        "git_revision": git_revision(),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "settings": json.loads(json.dumps(asdict(FE_SETTINGS), default=str)),
+        "speeds_mm_s": list(SPEEDS_MM_S)}
+    missing: list[str] = []
+    for speed in SPEEDS_MM_S:
+        batch = run_sweep(designs, replace(FE_SETTINGS, speed_mm_s=speed), threads=threads,
+                          show_progress=show_progress)
+        for name, r in batch.results.items():
+            rec = record_from_result(r)
+            text = records_csv(rec)
+            atomic_write_text(speed_dir(out, speed) / f"{name}.csv", text)
+            entry = summary["designs"].setdefault(name, {})
+            entry.update({"placements": rec.placements, "area_mm2": rec.area_mm2})
+            entry.setdefault("sha256", {})[f"{speed:g}"] = hashlib.sha256(text.encode()).hexdigest()
+            entry.setdefault("wall_s", {})[f"{speed:g}"] = r.wall_s
+        missing += [f"{n}@{speed:g}mm/s" for n in [*batch.missing, *batch.errors]]
+        atomic_write_json(summary_path, summary)
+        if batch.interrupted:
+            break
+    return summary, missing
+
+
+def read_records(root: str | Path, design: str) -> tuple[list[SensorRecord], list[SensorRecord]]:
+    """(fitted, validation) records of one design from ``root/fe``."""
+    summary = json.loads((Path(root) / "fe" / "summary.json").read_text(encoding="utf-8"))
+    meta = summary["designs"].get(design)
+    if meta is None:
+        raise ValueError(f"{Path(root) / 'fe' / 'summary.json'}: no records of {design}")
+    recs = [load_records(speed_dir(root, v), design, v, meta) for v in SPEEDS_MM_S
+            if (speed_dir(root, v) / f"{design}.csv").is_file()]
+    if not recs or recs[0].speed_mm_s != SPEEDS_MM_S[0]:
+        raise ValueError(f"{speed_dir(root, SPEEDS_MM_S[0]) / (design + '.csv')}: missing")
+    return recs[:1], recs[1:]
+
+
+def fit_all(designs: list[str], root: str | Path) -> dict[str, Any]:
+    """Fit every design's transfer laws from ``root/fe`` and write ``root/transfer.json``."""
+    root = Path(root)
+    fe_summary = json.loads((root / "fe" / "summary.json").read_text(encoding="utf-8"))
+    try:  # a subset refits those designs and keeps the others
+        old = json.loads((root / "transfer.json").read_text(encoding="utf-8"))
+        laws = dict(old["laws"])
+        sha = dict(old["provenance"]["fe_sha256"])
+    except (OSError, ValueError, KeyError, TypeError):
+        laws, sha = {}, {}
+    sha.update({d: fe_summary["designs"][d].get("sha256") for d in designs})
+    for design in designs:
+        fit, val = read_records(root, design)
+        laws[design] = {name: fit_transfer(name, fit, val).to_dict()
+                        for name in fit[0].readings_N}
+    data = {"provenance": {"softhand_version": __version__, "git_revision": git_revision(),
+                           "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                           "fe_records": fe_summary["provenance"],
+                           "fe_sha256": sha,
+                           "law": "softhand.sensors.transfer.TransferLaw"},
+            "laws": dict(sorted(laws.items()))}
+    atomic_write_json(root / "transfer.json", data)
+    return data
+
+
+def load_transfer_laws(path: str | Path) -> dict[tuple[str, str], TransferLaw]:
+    """Every law of a ``transfer.json``, keyed (design, placement); ValueError names the key."""
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{p}: cannot read the transfer laws ({exc})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("laws"), dict):
+        raise ValueError(f"{p}: expected an object with 'laws'")
+    out = {}
+    for design, per in data["laws"].items():
+        if not isinstance(per, dict):
+            raise ValueError(f"{p}: laws.{design}: expected an object of placements")
+        for name, d in per.items():
+            try:
+                law = TransferLaw.from_dict(d, key=f"laws.{design}.{name}")
+            except ValueError as exc:
+                raise ValueError(f"{p}: {exc}") from None
+            out[(law.design, law.placement)] = law
+    return out
