@@ -321,3 +321,21 @@ def test_cli_bad_sensor_input_is_one_line(args, needles, monkeypatch):
     assert "\n" not in line and line.startswith("error: "), res.output
     for n in needles:
         assert n in line, (n, line)
+
+
+def test_design_table_from_the_shipped_laws(tmp_path):
+    """softhand bench sensors without handshakes: every design, the named usefulness criteria
+    applied as stated, the floor's dead band inside its FE bracket, the plot written."""
+    from softhand.bench.sensors import USEFUL, run_sensor_table
+
+    md = run_sensor_table(tmp_path, handshakes=False)
+    data = json.loads((tmp_path / "bench-sensors.json").read_text())
+    assert set(data["designs"]) == set(DESIGNS)
+    for d, row in data["designs"].items():
+        for s in row["sensors"].values():
+            want = (s["sensitivity"] >= USEFUL["sensitivity_min"]
+                    and s["law_dead_band_N"] <= USEFUL["dead_band_max_N"]
+                    and (s["relaxation_pct"] or 0) <= USEFUL["relaxation_max_pct"])
+            assert s["useful"] == want, (d, s)
+    assert (tmp_path / "bench-sensors.png").stat().st_size > 10_000
+    assert "| pocket2-sil | 19 |" in md and "useful placements" in md

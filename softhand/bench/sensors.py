@@ -13,9 +13,11 @@
    points and law, per placement.
 3. **Handshake** (default scene, seed 0): per region the contact force beside the sensor's
    reading, under the outer layer and on the pocket floor.
-4. **Controllers on sensor readings**: the force controller (2.5 N and 0.3 N targets) and the
-   neutral controller (touch at 0.3 N) fed the true contact forces or the sensors' calibrated
-   read-out, on the interface and on the pocket floor: what a pocket's dead band does to them.
+4. **Controllers on sensor readings**: the neutral controller (each finger stops at a 0.3 N
+   touch) and the force controller (2.5 N) fed the true contact forces or the sensors' calibrated
+   read-out, under the outer layer and on the pocket floor, on pocket2-sil (dead band 0.32 N) and
+   pocket2-pu (0.84 N); with the A101 electronics and with ideal ones (no threshold, latency,
+   noise or quantization), which isolates the dead band.
 
 Written to ``reports/bench-sensors.{json,md,png}``.
 """
@@ -114,10 +116,10 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
     from softhand.sensors.calibrate import load_transfer_laws, read_records
 
     laws = load_transfer_laws(Path(root) / "transfer.json")
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
+    fig, axes = plt.subplots(2, 3, figsize=(15, 9))
     designs = sorted({d for d, _ in laws})
     colours = plt.cm.tab20(np.linspace(0, 1, len(designs)))
-    for ax, placement in zip(axes, PLACEMENT_ORDER, strict=True):
+    for col, placement in enumerate(PLACEMENT_ORDER):
         for c, design in zip(colours, designs, strict=True):
             law = laws.get((design, placement))
             if law is None:
@@ -125,16 +127,23 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
             rec = read_records(root, design)[0][0]
             name = next(n for n, p in rec.placements.items() if p == placement)
             ramp = ~rec.hold
-            ax.plot(rec.force_N[ramp], rec.readings_N[name][ramp], "o", ms=2.5, color=c)
-            ax.plot(rec.force_N[ramp], law.reading(rec.time_s, rec.force_N)[ramp], "-",
-                    color=c, lw=1, label=design)
-        ax.set_title(f"{placement} (4 x 4 mm patch)")
-        ax.set_xlabel("load on the skin (plate force), N")
-        ax.set_ylabel("sensor reading, N on the patch")
-        ax.set_xlim(0, 20)
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, ncol=2)
-    fig.suptitle("Transfer curves of the embedded sensors: FE (points) and fitted laws (lines), "
+            model = law.reading(rec.time_s, rec.force_N)
+            for ax in axes[:, col]:
+                ax.plot(rec.force_N[ramp], rec.readings_N[name][ramp], "o", ms=2.5, color=c)
+                ax.plot(rec.force_N[ramp], model[ramp], "-", color=c, lw=1, label=design)
+        for row, (top, what) in enumerate(((20.0, "0-20 N"), (3.0, "0-3 N: the dead bands"))):
+            ax = axes[row, col]
+            ax.set_title(f"{placement} (4 x 4 mm patch), {what}")
+            ax.set_xlabel("load on the skin (plate force), N")
+            ax.set_ylabel("sensor reading, N on the patch")
+            ax.set_xlim(0, top)
+            if row:
+                ax.set_ylim(-0.1, 1.2)
+                ax.axhline(0.0, color="k", lw=0.5)
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7, ncol=2)
+    fig.suptitle("Transfer curves of the embedded sensors: FE (points; the bone under an open "
+                 "pocket is in tension) and fitted laws of a compression sensor (lines), "
                  "0.5 mm/s ramp")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -144,18 +153,27 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
     tmp.replace(path)
 
 
-def _handshake(placement: str, controller: str = "neutral", signal: str = "contact",
-               design: str = HANDSHAKE_DESIGN, **settings) -> dict[str, Any]:
-    from softhand.envs.run import run_handshake
+DIGITS = ("Index", "Middle", "Ring", "Little")
 
+
+def _handshake(placement: str, controller: str = "neutral", signal: str = "contact",
+               design: str = HANDSHAKE_DESIGN, ideal: bool = False, **settings) -> dict[str, Any]:
+    from dataclasses import replace
+
+    from softhand.envs.run import run_handshake
+    from softhand.sensors.device import FLEXIFORCE_A101
+
+    spec = (replace(FLEXIFORCE_A101, name="ideal", noise_N=0.0, threshold_N=0.0, latency_s=0.0,
+                    resolution_N=0.0) if ideal else FLEXIFORCE_A101)
     run = run_handshake(design=design, controller=controller, signal=signal,
-                        sensor_placement=placement, controller_settings=settings)
-    table = run.table()
+                        sensor_placement=placement, controller_settings=settings, sensor=spec)
     grip = np.array([p in ("grip", "shake") for p in run.phase])
-    digits = ("Index", "Middle", "Ring", "Little")
-    held = [float(np.max([run.region_force_N[grip, i] for i, r in enumerate(run.region_names)
-                          if r.startswith(d)], axis=0).mean()) for d in digits]
-    return {"regions": table, "digit_mean_held_N": dict(zip(digits, held, strict=True)),
+    digit = {d: np.max([run.region_force_N[:, i] for i, r in enumerate(run.region_names)
+                        if r.startswith(d)], axis=0) for d in DIGITS}
+    return {"regions": run.table(),
+            "digit_mean_held_N": {d: float(f[grip].mean()) for d, f in digit.items()},
+            "digit_peak_N": {d: float(f.max()) for d, f in digit.items()},
+            "flexion_deg": run.kinematics()["prosthetic_flexion_deg"],
             "steps_per_s": run.steps / run.wall_s}
 
 
@@ -172,20 +190,20 @@ def run_sensor_table(out_dir: str | Path = REPORTS_DIR, *, root: str | Path = SE
         data["fig4_regions"] = list(paper()["handshake"]["over_2N"])
         data["handshake"] = {p: _handshake(p) for p in ("interface", "pocket-floor")}
         runs = {}
-        for label, ctrl, signal, placement, kw in (
-                ("force 2.5 N, contact", "force", "contact", "interface", {}),
-                ("force 2.5 N, sensor interface", "force", "sensor", "interface", {}),
-                ("force 2.5 N, sensor pocket floor", "force", "sensor", "pocket-floor", {}),
-                ("force 0.3 N, contact", "force", "contact", "interface", {"target_N": 0.3}),
-                ("force 0.3 N, sensor interface", "force", "sensor", "interface",
-                 {"target_N": 0.3}),
-                ("force 0.3 N, sensor pocket floor", "force", "sensor", "pocket-floor",
-                 {"target_N": 0.3}),
-                ("neutral, contact", "neutral", "contact", "interface", {}),
-                ("neutral, sensor interface", "neutral", "sensor", "interface", {}),
-                ("neutral, sensor pocket floor", "neutral", "sensor", "pocket-floor", {})):
-            runs[label] = {"controller": ctrl, "signal": signal, "placement": placement, **kw,
-                           **_handshake(placement, ctrl, signal, **kw)}
+        feeds = (("contact", "contact", "interface", False),
+                 ("sensor under the outer layer", "sensor", "interface", False),
+                 ("sensor on the pocket floor", "sensor", "pocket-floor", False),
+                 ("ideal sensor under the outer layer", "sensor", "interface", True),
+                 ("ideal sensor on the pocket floor", "sensor", "pocket-floor", True))
+        for design in ("pocket2-sil", "pocket2-pu"):
+            for ctrl in ("neutral", "force"):
+                for label, signal, placement, ideal in feeds:
+                    if ctrl == "force" and ideal:
+                        continue
+                    runs[f"{design}, {ctrl}, {label}"] = {
+                        "design": design, "controller": ctrl, "signal": signal,
+                        "placement": placement, "ideal_electronics": ideal,
+                        **_handshake(placement, ctrl, signal, design, ideal)}
         data["controllers"] = runs
     atomic_write_json(out / "bench-sensors.json", data)
     md = _markdown(data)
@@ -209,9 +227,9 @@ def _markdown(d: dict[str, Any]) -> str:
              f"{d['useful']['dead_band_max_N']} N, reading relaxes <= "
              f"{d['useful']['relaxation_max_pct']:g} %.", "",
              "| design | lifelike distance % | plate relaxes % | bone N/N | under the outer layer "
-             "N/N | pocket floor N/N | floor dead band N (FE bracket) | reading relaxes, bone / "
-             "layer / floor % | law RMS error, fit / 2 mm/s, % of span (worst placement) | "
-             "useful placements |",
+             "N/N | pocket floor N/N | dead band N: bone / floor (floor's FE bracket) | reading "
+             "relaxes, bone / layer / floor % | law RMS error, fit / 2 mm/s, % of span (worst "
+             "placement) | useful placements |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     rows = sorted(d["designs"].items(),
                   key=lambda kv: (kv[1]["lifelike_distance_pct"] is None,
@@ -219,8 +237,9 @@ def _markdown(d: dict[str, Any]) -> str:
     for name, r in rows:
         s = {v["placement"]: v for v in r["sensors"].values()}
         floor = s.get("pocket-floor")
-        dead = (f"{floor['law_dead_band_N']:.2f} ({floor['dead_band_N'][0]:.2f}-"
-                f"{floor['dead_band_N'][1]:.2f})" if floor and floor["dead_band_N"] else "-")
+        dead = f"{s['bone']['law_dead_band_N']:.2f} / " + (
+            f"{floor['law_dead_band_N']:.2f} ({floor['dead_band_N'][0]:.2f}-"
+            f"{floor['dead_band_N'][1]:.2f})" if floor and floor["dead_band_N"] else "-")
         relax = " / ".join("-" if k not in s or s[k]["relaxation_pct"] is None
                            else f"{s[k]['relaxation_pct']:.1f}" for k in PLACEMENT_ORDER)
         fit = max(v["fit_rms_pct"] for v in s.values())
@@ -248,14 +267,20 @@ def _markdown(d: dict[str, Any]) -> str:
                          f"{c['sensor_peak']:.2f} / {c['sensor_mean']:.2f} | "
                          f"{f['sensor_peak']:.2f} / {f['sensor_mean']:.2f} |")
         lines += ["", "## Controllers on sensor readings", "",
-                  f"{HANDSHAKE_DESIGN} everywhere, seed 0. The feedback is the true contact "
-                  "force, or the sensors' calibrated read-out (the transfer law inverted; "
-                  "nothing inside a dead band). Held force: the mean over the grip and shake of "
-                  "each finger's most loaded region.", "",
-                  "| controller, feedback | held force index / middle / ring / little N | "
-                  "Index3 peak N | Palm1 peak N |", "|---|---|---|---|"]
+                  "One design everywhere, seed 0. Neutral: each finger closes until the force it "
+                  "feels passes 0.3 N, then holds; force: each finger holds 2.5 N. The feedback "
+                  "is the true contact force, or the sensors' calibrated read-out (the transfer "
+                  "law inverted; nothing inside a dead band), with the A101 electronics or ideal "
+                  "ones (no threshold, latency, noise, quantization). Forces are true contact "
+                  "forces of each finger's most loaded region: held = mean over the grip and "
+                  "shake, peak = over the handshake.", "",
+                  "| design, controller, feedback | held index / middle / ring / little N | "
+                  "peak index / middle / ring / little N | flexion index / middle deg |",
+                  "|---|---|---|---|"]
         for label, v in d["controllers"].items():
             held = " / ".join(f"{x:.2f}" for x in v["digit_mean_held_N"].values())
-            lines.append(f"| {label} | {held} | {v['regions']['Index3']['peak_N']:.2f} | "
-                         f"{v['regions']['Palm1']['peak_N']:.2f} |")
+            peak = " / ".join(f"{x:.2f}" for x in v["digit_peak_N"].values())
+            flex = v["flexion_deg"]
+            lines.append(f"| {label} | {held} | {peak} | {flex['index']:.0f} / "
+                         f"{flex['middle']:.0f} |")
     return "\n".join(lines) + "\n"
