@@ -44,6 +44,8 @@ def qlv_response_matrix(fe: np.ndarray, t_s: np.ndarray, prony: Prony) -> np.nda
     """QLV force for several elastic histories at once: ``fe`` has shape (n_times, n_columns).
 
     The response is linear in ``fe``; a fit uses this to solve for the elastic law's coefficients.
+    ``prony`` is a :class:`Prony` or any kernel with ``g``, ``g_inf`` and ``step_factors`` (the
+    sensors' share kernel, whose ratios may be negative: :mod:`softhand.sensors.transfer`).
     """
     fe = np.asarray(fe, dtype=float)
     out = prony.g_inf * fe

@@ -51,6 +51,7 @@ from softhand.fem.materials import Prony
 from softhand.fem.sensors import PLACEMENTS
 from softhand.fem.solver import IndentationResult, IndentationSettings
 from softhand.laws.elastic import ElasticLaw, basis_matrix, knots_at
+from softhand.laws.qlv import qlv_response_matrix
 from softhand.validate import check_mapping, check_number, join, show
 
 __all__ = [
@@ -196,24 +197,23 @@ class ShareKernel:
     def k_inf(self) -> float:
         return 1.0 - sum(self.c)
 
+    # K(t) = k_inf + sum c_k exp(-t / tau_k): a Prony series whose ratios may be negative, so the
+    # QLV recursion of softhand.laws.qlv runs on it unchanged (it reads g, g_inf, step_factors)
+    @property
+    def g(self) -> tuple[float, ...]:
+        return self.c
+
+    @property
+    def g_inf(self) -> float:
+        return self.k_inf
+
     def step_factors(self, dt_s) -> tuple[np.ndarray, np.ndarray]:
         """The package's one hereditary recursion (:meth:`Prony.step_factors`) for these times."""
         return Prony((0.0,) * len(self.tau_s), self.tau_s).step_factors(dt_s)
 
     def response(self, g: np.ndarray, t_s: np.ndarray) -> np.ndarray:
         """R for instantaneous-share histories ``g`` (n_times, n_columns) sampled at ``t_s``."""
-        g = np.asarray(g, dtype=float)
-        out = self.k_inf * g
-        if not self.c:
-            return out
-        decay, ramp = self.step_factors(np.diff(np.asarray(t_s, dtype=float)))
-        dg = np.diff(g, axis=0)
-        c = np.asarray(self.c)[:, None]
-        h = np.zeros((len(self.c), g.shape[1]))
-        for n in range(dg.shape[0]):
-            h = decay[:, n, None] * h + c * ramp[:, n, None] * dg[n][None, :]
-            out[n + 1] += h.sum(axis=0)
-        return out
+        return qlv_response_matrix(g, t_s, self)
 
     def to_dict(self) -> dict:
         return {"c": list(self.c), "tau_s": list(self.tau_s), "k_inf": self.k_inf}
