@@ -111,6 +111,28 @@ ASSUMPTIONS = {
 }
 
 
+class _Share:
+    """A share spline g(u) tabulated at 0.001 N steps and interpolated linearly (one np.interp
+    per law and env step: the B-spline costs about 50 us for the env's 18 loads); the table's
+    error, h^2/8 max|g''|, is below 1e-5 N for every shipped law (4e-6 N measured; a test), far under a 10-bit
+    quantum (0.043 N). 0 for u <= 0, linear past the fitted range (as :meth:`ElasticLaw.force`)."""
+
+    STEP_N = 0.001
+
+    def __init__(self, law: TransferLaw) -> None:
+        top = law.share.max_mm
+        self.u = np.linspace(0.0, top, int(np.ceil(top / self.STEP_N)) + 1)
+        self.g = law.share.force(self.u)
+        self.top, self.k_top = top, law.share.end_stiffness
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        out = np.interp(u, self.u, self.g, left=0.0)
+        beyond = u > self.top
+        if beyond.any():
+            out[beyond] = self.g[-1] + (u[beyond] - self.top) * self.k_top
+        return out
+
+
 class TransferBank:
     """The transfer laws of all sensing regions, stepped together (one QLV state per region).
 
@@ -130,6 +152,7 @@ class TransferBank:
         self.decay = np.ones((n, terms))
         self.ramp = np.zeros((n, terms))
         self._groups: dict[int, tuple[TransferLaw, np.ndarray]] = {}
+        self._share: dict[int, _Share] = {}
         for i, law in enumerate(laws):
             if law is None:
                 continue
@@ -141,6 +164,7 @@ class TransferBank:
             key = id(law)
             idx = self._groups.get(key, (law, np.zeros(0, int)))[1]
             self._groups[key] = (law, np.append(idx, i))
+            self._share.setdefault(key, _Share(law))
         self._ideal = np.array([law is None for law in laws])
         # the static inverse of each law's share, tabulated once (monotone: np.interp)
         self._inverse = {}
@@ -156,8 +180,8 @@ class TransferBank:
     def step(self, load_N: np.ndarray) -> np.ndarray:
         """Readings (N on each patch) after one env step that ends at loads ``load_N``."""
         g = np.array(load_N, dtype=float)  # ideal regions: g = load
-        for law, idx in self._groups.values():
-            g[idx] = law.share.force(np.maximum(g[idx] - law.dead_band_N, 0.0))
+        for key, (law, idx) in self._groups.items():
+            g[idx] = self._share[key](g[idx] - law.dead_band_N)
         self.h = self.decay * self.h + self.c * self.ramp * (g - self.g)[:, None]
         self.g = g
         return self.k_inf * g + self.h.sum(axis=1)
