@@ -22,7 +22,7 @@ from scipy.interpolate import BSpline
 
 from softhand.validate import check_mapping, check_numbers, join
 
-__all__ = ["ElasticLaw", "basis_matrix", "knot_vector", "knots_at"]
+__all__ = ["ElasticLaw", "basis_matrix", "knot_vector", "knots_at", "monotone_inverse"]
 
 _DEGREE = 2  # stiffness degree; force is one degree higher
 
@@ -53,6 +53,15 @@ def basis_matrix(knots: np.ndarray, delta_mm: np.ndarray) -> np.ndarray:
     n = knots.size - _DEGREE - 1
     eye = np.eye(n)
     return np.stack([ElasticLaw(knots, eye[j]).force(delta_mm) for j in range(n)], axis=-1)
+
+
+def monotone_inverse(y, x, f) -> np.ndarray:
+    """The one inversion of a tabulated monotone curve: x at which f(x) (non-decreasing, sampled
+    at increasing ``x``) reaches each ``y``, linear between samples, clamped to the table's ends.
+    A flat or slightly falling step of the samples (round-off of a tabulated ramp) is taken as
+    flat, so that the inverse stays single-valued. (A law inverts itself exactly:
+    :meth:`ElasticLaw.displacement_at`.)"""
+    return np.interp(y, np.maximum.accumulate(np.asarray(f, dtype=float)), x)
 
 
 @dataclass(frozen=True)
@@ -109,23 +118,26 @@ class ElasticLaw:
         """Stiffness at the end of the fitted range (N/mm), used past it."""
         return float(self.coefficients[-1])
 
-    def displacement_at(self, force_N: float) -> float:
-        """Indentation (mm) at which the law reaches ``force_N`` (> 0)."""
-        if not np.isfinite(force_N) or force_N <= 0:
-            raise ValueError(f"force_N = {force_N!r} must be finite and > 0")
+    def displacement_at(self, force_N):
+        """Indentation (mm) at which the law reaches ``force_N`` (each > 0): the one inversion of a
+        law, by bisection (the law is monotone; 60 halvings: to round-off), linear past
+        :attr:`max_mm`. A float for a number, an array for an array."""
+        f = np.asarray(force_N, dtype=float)
+        if not np.all(np.isfinite(f)) or np.any(f <= 0):
+            bad = f.ravel()[~(np.isfinite(f.ravel()) & (f.ravel() > 0))][0]
+            raise ValueError(f"force_N = {float(bad)!r} must be finite and > 0")
         f_end = float(self.force(self.max_mm))
-        if force_N >= f_end:
-            if self.end_stiffness <= 0:
-                raise ValueError(f"the law never reaches {force_N} N (at most {f_end:.4g} N)")
-            return self.max_mm + (force_N - f_end) / self.end_stiffness
-        lo, hi = 0.0, self.max_mm
-        for _ in range(60):  # bisection: the law is monotone
+        beyond = f >= f_end
+        if np.any(beyond) and self.end_stiffness <= 0:
+            raise ValueError(f"the law never reaches {float(f.max())} N (at most {f_end:.4g} N)")
+        lo, hi = np.zeros_like(f), np.full_like(f, self.max_mm)
+        for _ in range(60):
             mid = 0.5 * (lo + hi)
-            if self.force(mid) < force_N:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
+            below = self.force(mid) < f
+            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+        out = np.where(beyond, self.max_mm + (f - f_end) / max(self.end_stiffness, 1e-300),
+                       0.5 * (lo + hi))
+        return float(out) if out.ndim == 0 else out
 
     def to_dict(self) -> dict:
         return {"knots_mm": self.knots.tolist(), "coefficients_N_per_mm": self.coefficients.tolist()}

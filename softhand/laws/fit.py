@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares, nnls
 
-from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector, knots_at
+from softhand.laws.elastic import ElasticLaw, basis_matrix, knot_vector, knots_at, monotone_inverse
 from softhand.laws.qlv import Prony, qlv_force, qlv_response_matrix
 from softhand.paper import paper
 from softhand.validate import check_mapping, check_number, join, show
@@ -322,7 +322,7 @@ class SkinLaw:
         f = self.force(d / speed_mm_s, d)
         if f[-1] < force_N:
             raise ValueError(f"{self.name}: {force_N} N is not reached by {top:.3g} mm")
-        return float(np.interp(force_N, f, d))
+        return float(monotone_inverse(force_N, d, f))
 
     def to_dict(self) -> dict:
         return {"name": self.name, "elastic": self.elastic.to_dict(),
@@ -414,9 +414,9 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
     else:
         first = curves[0]
         i = first.peak_index
-        ramp_f = np.maximum.accumulate(first.force_N[:i + 1])
-        reach = [f for f in knot_forces_N if f < ramp_f[-1]]
-        knots = knots_at(top, np.interp(reach, ramp_f, first.displacement_mm[:i + 1]))
+        ramp_f = first.force_N[:i + 1]
+        reach = [f for f in knot_forces_N if f < ramp_f.max()]
+        knots = knots_at(top, monotone_inverse(reach, first.displacement_mm[:i + 1], ramp_f))
     bases = [basis_matrix(knots, c.displacement_mm) for c in curves]
     # every curve counts equally (1 / sqrt(samples)); within a curve, force_weights
     weights = [force_weights(c.force_N) / np.sqrt(c.time_s.size) for c in curves]

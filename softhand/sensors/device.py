@@ -3,8 +3,11 @@ quantization and hysteresis, applied to the transfer law's reading.
 
 Default: :data:`FLEXIFORCE_A101`, a Tekscan FlexiForce A101 thin-film piezoresistive force sensor
 (a 3.8 mm sensing circle, the size of the FE's 4 x 4 mm patch; :mod:`softhand.fem.sensors`). From
-its public datasheet: standard force range 0-44 N (10 lbf, the saturation), hysteresis < 4.5 % of
-full scale, response time < 5 us (so the electronics, not the sensor, set the sampling).
+Tekscan's public A101 datasheet: standard force range 0-44 N (10 lbf, the saturation), hysteresis
+< 4.5 % of full scale, linearity within +-3 % (the FlexiForce user manual; not modelled: the
+read-out is taken as calibrated), response time < 5 us (so the electronics, not the sensor, set
+the sampling). These datasheet values were not re-checked against the current PDF (this project
+is built offline); each is a parameter of :class:`SensorSpec`.
 The electronics are named assumptions (:data:`ASSUMPTIONS`): a 10-bit ADC over the full range
 (quantum 44.5 / 1024 = 0.043 N), 100 Hz sampling, one sample of latency, a noise of half a quantum
 (0.02 N RMS), a threshold of 0.1 N (the reading is 0 below it). Hysteresis is off by default (the
@@ -37,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from softhand.laws.elastic import monotone_inverse
 from softhand.sensors.transfer import TransferLaw
 from softhand.validate import check_number
 
@@ -193,7 +197,7 @@ class TransferBank:
         for key, (law, idx) in self._groups.items():
             g, u = self._inverse[key]
             r = out[idx]
-            out[idx] = np.where(r > 0, np.interp(r, g, u) + law.dead_band_N, 0.0)
+            out[idx] = np.where(r > 0, monotone_inverse(r, u, g) + law.dead_band_N, 0.0)
         return out
 
 

@@ -135,7 +135,7 @@ class PadParams:
             return e
         top = e.max_mm
         f = np.linspace(0.0, float(e.force(top)), 400)[1:]
-        x = np.array([e.displacement_at(v) for v in f]) - f / self.contact_stiffness * 1e3
+        x = e.displacement_at(f) - f / self.contact_stiffness * 1e3
         if np.any(np.diff(x) <= 0) or x[0] <= 0:
             raise ValueError(f"contact_stiffness = {self.contact_stiffness:.4g} N/m is not stiffer "
                              "than the skin everywhere; raise it")

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from softhand.laws.elastic import ElasticLaw
+from softhand.laws.elastic import monotone_inverse
 from softhand.laws.fit import SkinLaw, split_errors
 from softhand.paper import paper
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -44,20 +44,14 @@ def loading_inverse(law: SkinLaw, force_N: np.ndarray, *, top_N: float) -> np.nd
     its own curve), by interpolating a dense monotone ramp up to ``top_N``."""
     depth = law.quasi_static_displacement_at(top_N, _RAMP_MM_S)
     d = np.linspace(0.0, depth, 4000)
-    f = law.force(d / _RAMP_MM_S, d)
-    f = np.maximum.accumulate(f)  # guard against a flat step in the tabulated ramp
-    return np.interp(force_N, f, d)
-
-
-def _elastic_inverse(law: ElasticLaw, force_N: np.ndarray) -> np.ndarray:
-    return np.array([law.displacement_at(float(x)) for x in force_N])
+    return monotone_inverse(force_N, d, law.force(d / _RAMP_MM_S, d))
 
 
 def series_curve(skin: SkinLaw, tissue: SkinLaw, top_N: float) -> tuple[np.ndarray, np.ndarray]:
     """(indentation mm, force N) of ``skin`` in series with ``tissue``, 0 to ``top_N``."""
     force = np.linspace(0.0, top_N, _SAMPLES + 1)[1:]
     d_skin = loading_inverse(skin, force, top_N=top_N)
-    d_tissue = _elastic_inverse(tissue.elastic, force)
+    d_tissue = tissue.elastic.displacement_at(force)
     return np.concatenate([[0.0], d_skin + d_tissue]), np.concatenate([[0.0], force])
 
 

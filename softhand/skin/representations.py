@@ -45,6 +45,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
+from softhand.laws.elastic import monotone_inverse
 from softhand.laws.fit import REFERENCE_FORCE_N, Curve, SkinLaw, split_errors
 from softhand.skin.pad import PadParams, add_pad
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -209,7 +210,7 @@ class SoftContact(Representation):
         _, d, f = loading_ramp(curve)
         soft, rms_n, status = fit_soft_contact(
             d, f, reference_mass_kg=settings.mass_kg * MASS_FACTORS[0])
-        at_2n = float(np.interp(REFERENCE_FORCE_N, f, d))
+        at_2n = float(monotone_inverse(REFERENCE_FORCE_N, d, f))
         extra = {"fit_status": status.value, "closed_form_rms_pct_of_2N": 100 * rms_n / 2.0,
                  "closed_form": split_errors(soft.force(d[1:]), f[1:]),
                  "posture_sensitivity_pct": posture_sensitivity(soft, at_2n)}
