@@ -142,7 +142,7 @@ def test_soft_contact_on_an_articulated_finger_gives_the_same_law(pocket_soft, p
     press = press_finger(pocket_soft, posture, depth_mm=4.0)
     loaded = press.force_N > 0.02
     assert press.force_N.max() > 1.0
-    err = press.force_N[loaded] - pocket_soft.force(press.indentation_mm[loaded])
+    err = press.force_N[loaded] - pocket_soft.force(press.displacement_mm[loaded])
     assert 100 * np.sqrt(np.mean(err**2)) / 2 < 2.0  # measured < 0.01 %
 
 

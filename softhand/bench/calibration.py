@@ -57,10 +57,10 @@ def run_calibration_benchmark(out_dir: str | Path = REPORTS_DIR, *, skins: list[
             model = build_rig(rep, cal.params(rep), settings=settings)
             outs = [run_rig(model, curve.time_s, curve.displacement_mm, settings=settings)
                     for _ in range(REPEATS)]
-            best = min(outs, key=lambda o: o.step_us)
+            best = min(outs, key=lambda o: o.stats["step_us"])
             rms, mx = loading_error(best, curve)
             row[rep] = {"rms_pct": rms, "max_pct": mx, "hold_pct": hold_error(best, curve),
-                        "step_us": best.step_us, "nv": int(model.nv)}
+                        "step_us": best.stats["step_us"], "nv": int(model.nv)}
         base = row.get("rigid", {}).get("step_us")
         for r in row.values():
             r["cost_vs_rigid"] = None if not base else r["step_us"] / base
@@ -87,7 +87,7 @@ def _flex_row(params: dict[str, Any], curve) -> dict[str, Any]:
     err = sim.force_at(d) - f
     return {"rms_pct": float(100 * np.sqrt(np.mean(err**2)) / 2),
             "max_pct": float(100 * np.abs(err).max() / 2), "hold_pct": None,
-            "step_us": 1e6 * sim.step_wall_s / sim.n_steps}
+            "step_us": 1e6 * sim.stats["step_wall_s"] / sim.stats["steps"]}
 
 
 def _aggregate(rows: dict[str, dict[str, Any]]) -> dict[str, Any]:

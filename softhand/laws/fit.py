@@ -111,9 +111,18 @@ def paired_arrays(x, y, names: tuple[str, str], min_size: int = 2
 class Curve:
     """One indentation record: plate displacement and force against time, ramp then hold.
 
+    The one force-displacement record of softhand: the FE's curves (read back from their CSV),
+    and the simulated records of MuJoCo (the rig, the flex pad, the finger press) alike.
+
+    Attributes:
+        monotone: True for a measured or FE record, whose ramp must be monotone (checked);
+            False for a simulated record (a contact's force may dip as it settles).
+        stats: a simulated record's run statistics (``wall_s``, ``steps``, ``step_us``, and what
+            a simulator adds: ``step_wall_s``, ``max_penetration_mm``, ``n_warnings``).
+
     Raises:
-        ValueError: NaN, unequal lengths, decreasing time, or a ramp whose displacement or force
-            is not monotone.
+        ValueError: NaN, unequal lengths, decreasing time, or (``monotone``) a ramp whose
+            displacement or force is not monotone.
     """
 
     time_s: np.ndarray
@@ -122,6 +131,8 @@ class Curve:
     hold: np.ndarray
     label: str = ""
     sha256: str = ""
+    monotone: bool = True
+    stats: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         arrays = [np.asarray(a, dtype=float) for a in
@@ -142,7 +153,8 @@ class Curve:
             raise ValueError(f"curve {self.label!r}: time decreases at row "
                              f"{int(np.argmax(np.diff(arrays[0]) < 0)) + 1}")
         ramp = ~hold
-        for name, a in (("displacement", arrays[1][ramp]), ("force", arrays[2][ramp])):
+        checked = (("displacement", arrays[1][ramp]), ("force", arrays[2][ramp]))
+        for name, a in checked if self.monotone else ():
             steps = np.diff(a)
             tol = 1e-9 * max(1.0, float(np.abs(a).max()))
             if np.any(steps < -tol):
@@ -163,6 +175,24 @@ class Curve:
     def speed_mm_s(self) -> float:
         i = self.peak_index
         return float(self.displacement_mm[i] / self.time_s[i])
+
+    def force_at(self, displacement_mm) -> np.ndarray:
+        """Force (N) on the ramp at plate displacements ``displacement_mm`` (linear between
+        samples, on the monotone envelope of the displacement)."""
+        ramp = ~self.hold
+        d = np.maximum.accumulate(self.displacement_mm[ramp])
+        return np.interp(np.asarray(displacement_mm, dtype=float), d, self.force_N[ramp])
+
+    @classmethod
+    def simulated(cls, time_s, displacement_mm, force_N, *, label: str = "",
+                  **stats) -> Curve:
+        """A simulated ramp (no hold flag, not checked monotone) with its run statistics;
+        ``step_us`` is added from ``wall_s`` and ``steps`` when both are given."""
+        if "wall_s" in stats and "steps" in stats:
+            stats["step_us"] = 1e6 * stats["wall_s"] / max(int(stats["steps"]), 1)
+        t = np.asarray(time_s, dtype=float)
+        return cls(t, displacement_mm, force_N, np.zeros(t.shape, bool), label,
+                   monotone=False, stats=stats)
 
 
 def _text_hash(text: str) -> str:

@@ -294,7 +294,7 @@ def posture_sensitivity(soft: SoftContactParams, depth_mm: float) -> float:
     for posture in POSTURES_DEG:
         press = press_finger(soft, posture, depth_mm=1.5 * depth_mm)
         on = press.force_N > 0
-        err = press.force_N[on] - soft.force(press.indentation_mm[on])
+        err = press.force_N[on] - soft.force(press.displacement_mm[on])
         worst = max(worst, float(100 * np.sqrt(np.mean(err**2)) / 2.0))
     return worst
 
@@ -390,7 +390,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         relax = hold_error(out, checked)
         sens = None if rep == "rigid" else _mass_sensitivity(rep, checked, settings,
                                                                fitted.params)
-        results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.step_us, fit_s,
+        results[rep] = RepresentationResult(rep, params, rms, mx, sens, relax, out.stats["step_us"], fit_s,
                                             extra)
     provenance = {
         "softhand_version": __version__, "mujoco_version": mujoco.__version__,

@@ -9,28 +9,20 @@ contact's penetration, force its normal force. Sizes: an adult index finger (45 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
+from softhand.laws.fit import Curve
 from softhand.skin.rig import apply_pair_law
 from softhand.skin.soft_contact import SoftContactParams
 
-__all__ = ["POSTURES_DEG", "FingerPress", "press_finger"]
+__all__ = ["POSTURES_DEG", "press_finger"]
 
 LINKS_M = (0.045, 0.025, 0.020)
 LINK_MASS_KG = (0.020, 0.010, 0.006)
 SKIN_HALF_AXES_M = (0.008, 0.007, 0.004)
 POSTURES_DEG = {"straight": (0.0, 0.0, 0.0), "hook": (0.0, 60.0, 40.0),
                 "grip": (45.0, 45.0, 30.0), "fist": (80.0, 90.0, 60.0)}
-
-
-@dataclass(frozen=True)
-class FingerPress:
-    posture: str
-    indentation_mm: np.ndarray
-    force_N: np.ndarray
 
 
 def _build(soft: SoftContactParams, posture: tuple[float, float, float], timestep: float
@@ -64,8 +56,10 @@ def _build(soft: SoftContactParams, posture: tuple[float, float, float], timeste
 
 
 def press_finger(soft: SoftContactParams, posture: str, *, depth_mm: float,
-                 speed_mm_s: float = 0.5, timestep: float = 1e-3) -> FingerPress:
-    """Hold ``posture`` and press the fingertip skin with a plate along its normal."""
+                 speed_mm_s: float = 0.5, timestep: float = 1e-3) -> Curve:
+    """Hold ``posture`` and press the fingertip skin with a plate along its normal: a simulated
+    :class:`~softhand.laws.fit.Curve` labelled ``posture`` (``displacement_mm``: the skin
+    contact's penetration, ``force_N`` its normal force)."""
     if posture not in POSTURES_DEG:
         raise ValueError(f"posture {posture!r} is unknown; allowed: {', '.join(POSTURES_DEG)}")
     model = _build(soft, POSTURES_DEG[posture], timestep)
@@ -91,4 +85,4 @@ def press_finger(soft: SoftContactParams, posture: str, *, depth_mm: float,
             if skin in (c.geom1, c.geom2):
                 pen[k] = -1e3 * c.dist
                 force[k] = data.efc_force[c.efc_address]
-    return FingerPress(posture, pen, force)
+    return Curve.simulated(timestep * np.arange(1, n + 1), pen, force, label=posture)

@@ -49,9 +49,9 @@ import mujoco
 import numpy as np
 from scipy.optimize import least_squares
 
-from softhand.laws.fit import FitStatus, fit_status
+from softhand.laws.fit import Curve, FitStatus, fit_status
 
-__all__ = ["FlexCurve", "FlexFit", "FlexPadParams", "build_flex_rig", "fit_flex", "flex_cost_ratio",
+__all__ = ["FlexFit", "FlexPadParams", "build_flex_rig", "fit_flex", "flex_cost_ratio",
            "plate_force", "simulate_flex_indentation"]
 
 _PLATE_GEOM = "plate"
@@ -124,37 +124,6 @@ class FlexPadParams:
             raise ValueError(f"n_width={self.n_width!r} must be even (allowed: 2, 4, ..., 24)")
         if self.material not in _MATERIALS:
             raise ValueError(f"material={self.material!r} is not one of {sorted(_MATERIALS)}")
-
-
-@dataclass(frozen=True)
-class FlexCurve:
-    """A simulated indentation ramp.
-
-    Attributes:
-        t_s: time of each step, s.
-        delta_mm: plate displacement from first touch, mm.
-        force_N: sum of plate-pad contact normal forces, N.
-        wall_s: wall time of the stepping loop (stepping plus force read-out), s.
-        n_steps: number of ``mj_step`` calls.
-        step_wall_s: wall time spent inside ``mj_step`` alone, s.
-        max_penetration_mm: deepest plate-flex contact penetration seen, mm.
-        n_warnings: MuJoCo warnings raised during the ramp (``mjData.warning`` counts summed), e.g.
-            an under-converged flex solve on an ill-conditioned mesh; 0 on a clean run.
-    """
-
-    t_s: np.ndarray
-    delta_mm: np.ndarray
-    force_N: np.ndarray
-    wall_s: float
-    n_steps: int
-    step_wall_s: float
-    max_penetration_mm: float
-    n_warnings: int
-
-    def force_at(self, delta_mm) -> np.ndarray:
-        """Force (N) interpolated at displacements ``delta_mm`` (monotone envelope of delta)."""
-        d = np.maximum.accumulate(self.delta_mm)
-        return np.interp(np.asarray(delta_mm, dtype=float), d, self.force_N)
 
 
 @dataclass(frozen=True)
@@ -292,7 +261,7 @@ def plate_force(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, floa
 
 
 def _run_ramp(model: mujoco.MjModel, *, speed_mm_s: float, depth_mm: float,
-              max_force_N: float | None) -> FlexCurve:
+              max_force_N: float | None) -> Curve:
     data = mujoco.MjData(model)
     h = model.opt.timestep
     qadr = model.joint(_PLATE_JOINT).qposadr[0]
@@ -314,16 +283,16 @@ def _run_ramp(model: mujoco.MjModel, *, speed_mm_s: float, depth_mm: float,
                                      f"timestep {h}, delta {delta[s - 1] if s else 0:.3f} mm)")
         if max_force_N is not None and f >= max_force_N:
             break
-    return FlexCurve(t_s=t[:steps], delta_mm=delta[:steps], force_N=force[:steps],
-                     wall_s=time.perf_counter() - t0, n_steps=steps, step_wall_s=t_step,
-                     max_penetration_mm=pen_max * 1e3,
-                     n_warnings=int(sum(w.number for w in data.warning)))
+    return Curve.simulated(t[:steps], delta[:steps], force[:steps], label="flex",
+                           wall_s=time.perf_counter() - t0, steps=steps, step_wall_s=t_step,
+                           max_penetration_mm=pen_max * 1e3,
+                           n_warnings=int(sum(w.number for w in data.warning)))
 
 
 def simulate_flex_indentation(params: FlexPadParams, *, speed_mm_s: float = 0.5,
                               depth_mm: float, timestep: float = 1e-3,
                               plate_mass_kg: float = 0.02,
-                              max_force_N: float | None = None) -> FlexCurve:
+                              max_force_N: float | None = None) -> Curve:
     """Press the plate into the pad at constant speed and record force against displacement.
 
     Args:
@@ -335,7 +304,9 @@ def simulate_flex_indentation(params: FlexPadParams, *, speed_mm_s: float = 0.5,
         max_force_N: stop early once the plate force reaches this (N); None runs the full ramp.
 
     Returns:
-        The curve, one sample per step; ``delta_mm`` is the measured plate travel.
+        A simulated :class:`~softhand.laws.fit.Curve`, one sample per step (``displacement_mm``:
+        the measured plate travel; ``stats``: ``wall_s``, ``steps``, ``step_wall_s`` in
+        ``mj_step`` alone, ``max_penetration_mm``, ``n_warnings``).
 
     Raises:
         FloatingPointError: the simulation produced a bad (NaN or huge) acceleration.
@@ -396,7 +367,7 @@ def fit_flex(delta_mm, force_N, *, speed_mm_s: float = 0.5, seed: int = 0,
             curve = simulate_flex_indentation(params_of(x), speed_mm_s=speed_mm_s,
                                               depth_mm=depth, timestep=timestep)
             cache[key] = curve.force_at(d_t)
-            step_s.append(curve.step_wall_s / curve.n_steps)
+            step_s.append(curve.stats["step_wall_s"] / curve.stats["steps"])
         return (cache[key] - f_t) / 2.0
 
     # young is unbounded (clipped in params_of): a bound makes the trust region crawl towards it
@@ -431,5 +402,5 @@ def flex_cost_ratio(params: FlexPadParams | None = None, *, timestep: float = 1e
                             solimp=list(_SOLIMP))
     _add_plate(spec, top_m=2 * half[2], plate_mass_kg=0.02, timestep=timestep)
     rigid = _run_ramp(spec.compile(), speed_mm_s=speed_mm_s, depth_mm=depth_mm, max_force_N=None)
-    a, b = flex.step_wall_s / flex.n_steps, rigid.step_wall_s / rigid.n_steps
+    a, b = (c.stats["step_wall_s"] / c.stats["steps"] for c in (flex, rigid))
     return a / b, a, b

@@ -22,11 +22,11 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from softhand.laws.fit import paired_arrays
+from softhand.laws.fit import Curve, paired_arrays
 from softhand.skin.representations import StockContact, get_representation
 from softhand.skin.soft_contact import SoftContactParams
 
-__all__ = ["RigCurve", "RigSettings", "build_rig", "run_rig"]
+__all__ = ["RigSettings", "build_rig", "run_rig"]
 
 SKIN_HALF_AXES_M = (0.005, 0.008, 0.0125)  # phalanx: 10 mm long, 16 mm wide; 25 mm tall so
 # that a plate 8.6 mm deep (human tissue at 20 N) is still far from its far side (a convex
@@ -67,22 +67,6 @@ class RigSettings:
                                                   and self.load_cell_hz >= 0):
             raise ValueError(f"load_cell_hz = {self.load_cell_hz!r} must be finite and >= 0 "
                              "(0: a free indenter, for impact and dead-weight tests)")
-
-
-@dataclass(frozen=True)
-class RigCurve:
-    """What the rig measured (one sample per step)."""
-
-    representation: str
-    time_s: np.ndarray
-    displacement_mm: np.ndarray  # actual plate descent from first touch
-    force_N: np.ndarray  # normal contact force on the plate
-    wall_s: float  # time spent in mj_step only
-    steps: int
-
-    @property
-    def step_us(self) -> float:
-        return 1e6 * self.wall_s / max(self.steps, 1)
 
 
 def build_rig(representation: str, params: Any = None, *,
@@ -206,8 +190,11 @@ def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> 
 
 
 def run_rig(model: mujoco.MjModel, time_s, displacement_mm, *, representation: str = "",
-            settings: RigSettings = RigSettings()) -> RigCurve:
-    """Drive the plate along ``displacement_mm(time_s)`` (linear in between) and record it."""
+            settings: RigSettings = RigSettings()) -> Curve:
+    """Drive the plate along ``displacement_mm(time_s)`` (linear in between) and record it: a
+    simulated :class:`~softhand.laws.fit.Curve` (the plate's actual descent from first touch,
+    the normal contact force on the plate; ``stats``: ``wall_s`` in ``mj_step`` alone,
+    ``steps``, ``step_us``), labelled ``representation``."""
     t_cmd, d_cmd = paired_arrays(time_s, displacement_mm, ("time_s", "displacement_mm"))
     data = mujoco.MjData(model)
     dt = model.opt.timestep
@@ -229,4 +216,4 @@ def run_rig(model: mujoco.MjModel, time_s, displacement_mm, *, representation: s
         wall += time.perf_counter() - t0
         disp[k] = plate_mm - 1e3 * data.qpos[bone_q]
         force[k] = plate_force(model, data, plate_geom)
-    return RigCurve(representation, times, disp, force, wall, n)
+    return Curve.simulated(times, disp, force, label=representation, wall_s=wall, steps=n)
