@@ -628,7 +628,11 @@ def sensors_calibrate(out_dir, designs, fit_only, threads, force) -> None:
             except (OSError, ValueError, KeyError) as exc:
                 bad(f"--out {str(out)!r}: {exc} (run without --fit-only to make the records)")
     else:
-        _, missing = cal.run_sensor_fe(names, out, threads=threads)
+        _, missing, interrupted = cal.run_sensor_fe(names, out, threads=threads)
+        if interrupted:
+            raise Stopped(f"interrupted ({_STOP['by']}): the finished FE records are in "
+                          f"{out / 'fe'}; missing: {', '.join(missing)}; no law was fitted",
+                          EXIT_INTERRUPTED)
         if missing:
             raise Stopped(f"error: {len(missing)} FE records did not finish ({', '.join(missing)});"
                           f" the finished ones are in {out / 'fe'}; no law was fitted",

@@ -350,3 +350,47 @@ def test_design_table_from_the_shipped_laws(tmp_path):
             assert s["useful"] == want, (d, s)
     assert (tmp_path / "bench-sensors.png").stat().st_size > 10_000
     assert "| pocket2-sil | 19 |" in md and "useful placements" in md
+
+
+def test_sensors_calibrate_guards_the_shipped_laws_and_checks_records_first(tmp_path, monkeypatch):
+    """A subset cannot replace the shipped records; --fit-only needs the records; neither runs
+    an FE job before saying so."""
+    from click.testing import CliRunner
+
+    import softhand.sensors.calibrate as cal
+    from softhand.cli import main
+
+    def forbidden(*a, **k):
+        raise AssertionError("work started before the input was rejected")
+
+    monkeypatch.setattr(cal, "run_sensor_fe", forbidden)
+    monkeypatch.setattr(cal, "fit_all", forbidden)
+    for args, needles in (
+            (["--design", "pocket2-sil"], ["shipped calibration data", "--force"]),
+            (["--fit-only", "--out", str(tmp_path)], ["--fit-only", str(tmp_path)]),
+            (["--design", "pocket9-sil", "--out", str(tmp_path)], ["pocket9-sil"])):
+        res = CliRunner().invoke(main, ["sensors", "calibrate", *args])
+        line = res.output.strip()
+        assert res.exit_code == 2 and "\n" not in line, (args, res.output)
+        for n in needles:
+            assert n in line, (n, line)
+
+
+def test_sensors_calibrate_fit_only_writes_the_same_laws(tmp_path):
+    """Refitting from a copy of the shipped records reproduces the shipped laws (one design)."""
+    import shutil
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    shutil.copytree(SENSORS_DIR / "fe", tmp_path / "fe")
+    res = CliRunner().invoke(main, ["sensors", "calibrate", "--fit-only", "--design",
+                                    "pocket2-sil", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    new = load_transfer_laws(tmp_path / "transfer.json")
+    for p in ("bone", "interface", "pocket-floor"):
+        a, b = new[("pocket2-sil", p)], LAWS[("pocket2-sil", p)]
+        assert a.dead_band_N == pytest.approx(b.dead_band_N, abs=1e-9)
+        np.testing.assert_allclose(a.share.coefficients, b.share.coefficients, rtol=1e-6,
+                                   atol=1e-9)

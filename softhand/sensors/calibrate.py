@@ -48,11 +48,12 @@ def speed_dir(root: str | Path, speed_mm_s: float) -> Path:
 
 
 def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | None = None,
-                  show_progress: bool = True) -> tuple[dict[str, Any], list[str]]:
+                  show_progress: bool = True) -> tuple[dict[str, Any], list[str], bool]:
     """Run the FE records of ``designs`` at every speed and write them (each file atomically).
 
     Returns:
-        (the summary written, the designs x speeds that did not finish: interrupted or failed).
+        (the summary written, the designs x speeds that did not finish: interrupted or failed,
+        whether Ctrl-C stopped it).
     """
     out = Path(out_dir)
     summary_path = out / "fe" / "summary.json"
@@ -81,8 +82,10 @@ def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | Non
         missing += [f"{n}@{speed:g}mm/s" for n in [*batch.missing, *batch.errors]]
         atomic_write_json(summary_path, summary)
         if batch.interrupted:
-            break
-    return summary, missing
+            rest = SPEEDS_MM_S[SPEEDS_MM_S.index(speed) + 1:]
+            missing += [f"{n}@{v:g}mm/s" for v in rest for n in designs]
+            return summary, missing, True
+    return summary, missing, False
 
 
 def read_records(root: str | Path, design: str) -> tuple[list[SensorRecord], list[SensorRecord]]:
