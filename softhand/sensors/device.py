@@ -170,11 +170,6 @@ class TransferBank:
             self._groups[key] = (law, np.append(idx, i))
             self._share.setdefault(key, _Share(law))
         self._ideal = np.array([law is None for law in laws])
-        # the static inverse of each law's share, tabulated once (monotone: np.interp)
-        self._inverse = {}
-        for key, (law, _) in self._groups.items():
-            u = np.linspace(0.0, law.max_load_N - law.dead_band_N, 2001)
-            self._inverse[key] = (law.share.force(u), u)
         self.reset()
 
     def reset(self) -> None:
@@ -191,13 +186,14 @@ class TransferBank:
         return self.k_inf * g + self.h.sum(axis=1)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
-        """The load a calibrated read-out infers from each reading: the static share inverted
-        (a reading of 0 gives 0: a dead band cannot be seen into)."""
+        """The load a calibrated read-out infers from each reading: the static share inverted on
+        its table (a reading of 0 gives 0: a dead band cannot be seen into; past the fitted range,
+        the table's end)."""
         out = np.array(reading_N, dtype=float)
         for key, (law, idx) in self._groups.items():
-            g, u = self._inverse[key]
-            r = out[idx]
-            out[idx] = np.where(r > 0, monotone_inverse(r, u, g) + law.dead_band_N, 0.0)
+            share, r = self._share[key], out[idx]
+            out[idx] = np.where(r > 0, monotone_inverse(r, share.u, share.g) + law.dead_band_N,
+                                0.0)
         return out
 
 

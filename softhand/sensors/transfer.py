@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares, nnls
 
-from softhand.fem.geometry import DESIGNS, parse_design
+from softhand.fem.geometry import DESIGNS
 from softhand.fem.materials import Prony
 from softhand.fem.sensors import PLACEMENTS
 from softhand.fem.solver import IndentationResult, IndentationSettings
@@ -410,7 +410,3 @@ def fit_transfer(name: str, fit: list[SensorRecord], validation: list[SensorReco
                                              for r in validation}})
     return replace(law, fitted=tuple(transfer_errors(law, r, name) for r in fit),
                    validated=tuple(transfer_errors(law, r, name) for r in validation))
-
-
-def design_names() -> list[str]:
-    return [parse_design(d).name for d in DESIGNS]
