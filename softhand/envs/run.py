@@ -14,6 +14,7 @@ from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.skins import calibrated_max_force, skin_of_pair
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
+from softhand.sensors.device import ASSUMPTIONS
 
 __all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
 
@@ -206,7 +207,8 @@ class HandshakeRun:
         if self.representations:
             out["representations"] = dict(self.representations)
         if self.sensor_spec:
-            out["sensor"] = {"units": "N on the sensor patch", **self.sensor_spec}
+            out["sensor"] = {"units": "N on the sensor patch", **self.sensor_spec,
+                             "default_sources": ASSUMPTIONS}
         if self.controller:
             out["controller"] = dict(self.controller)
         relax = self.relaxation()

@@ -169,7 +169,6 @@ class TransferBank:
             idx = self._groups.get(key, (law, np.zeros(0, int)))[1]
             self._groups[key] = (law, np.append(idx, i))
             self._share.setdefault(key, _Share(law))
-        self._ideal = np.array([law is None for law in laws])
         self.reset()
 
     def reset(self) -> None:
@@ -203,7 +202,6 @@ class SensorChain:
     def __init__(self, laws: list[TransferLaw | None], spec: SensorSpec, step_s: float) -> None:
         self.spec = spec.on_grid(step_s)
         self.bank = TransferBank(laws, step_s)
-        self.step_s = step_s
         self._period = max(1, round(self.spec.period_s / step_s))
         self._lag = round(self.spec.latency_s / step_s)
         self.reset(np.random.default_rng(0))
@@ -216,7 +214,6 @@ class SensorChain:
         self._play = np.zeros(n)
         self._queue: list[tuple[int, np.ndarray]] = []  # (step available, sample)
         self.reading = np.zeros(n)
-        self.analog = np.zeros(n)
 
     def step(self, load_N: np.ndarray) -> np.ndarray:
         """The readings after one env step ending at ``load_N`` (N on each patch)."""
@@ -228,10 +225,9 @@ class SensorChain:
             half = np.minimum(0.5e-2 * s.hysteresis_pct * s.full_scale_N, np.maximum(r, 0.0))
             self._play = np.clip(self._play, r - half, r + half)
             r = self._play
-        self.analog = r
         if self._k % self._period == 0:
             x = r + (self.rng.normal(0.0, s.noise_N, r.shape) if s.noise_N > 0 else 0.0)
-            x = np.where(x < max(s.threshold_N, 0.0), 0.0, np.minimum(x, s.full_scale_N))
+            x = np.where(x < s.threshold_N, 0.0, np.minimum(x, s.full_scale_N))  # no tension
             if s.resolution_N > 0:
                 x = np.round(x / s.resolution_N) * s.resolution_N
             self._queue.append((self._k + self._lag, x))
