@@ -5,11 +5,13 @@
 ``softhand fe export DESIGN``   an Abaqus or CalculiX input deck of the same model
 ``softhand calibrate [SKIN ...]``  laws + MuJoCo parameters per skin into calibration/skins
 ``softhand skin apply HAND OUT``  calibrated skin on named geoms of any MJCF hand, as MJCF
+``softhand skin flex-press``    a flex pad on one prosthetic phalanx: force, contact area, pressure
 ``softhand handshake``          one handshake with shipped calibration: region forces, rerun recording
 ``softhand render OUT.png``     a picture of the handshake (offscreen mujoco.Renderer)
 ``softhand bench fe``           speed against error of the FE stage, written to a report
 ``softhand bench calibration``  error against FE and cost per step of each MuJoCo representation
 ``softhand bench handshake``    handshake speed and the skins side by side
+``softhand bench flex``         the flex region on the hand against the flex rig and the FE
 ``softhand bench sensors``      embedded sensors: the design table, transfer curves, the handshake
 ``softhand sensors calibrate``  FE sensor records and transfer laws per design and placement
 
@@ -396,6 +398,76 @@ def skin_apply(hand, out, geom_items, against, max_force) -> None:
     click.echo(f"wrote {path}")
 
 
+@skin.command("flex-press")
+@click.option("--design", default="pocket2-sil", show_default=True,
+              help="Skin whose calibrated flex pad is pressed (any calibrated skin).")
+@click.option("--region", default="Index3", show_default=True,
+              help="Phalanx region of the prosthetic hand that wears the pad (Thumb1-2, "
+                   "Index1-3, Middle1-3, Ring1-3, Little1-3).")
+@click.option("--posture", type=click.Choice(["extended", "flexed"]), default="extended",
+              show_default=True, help="The digit extended, or its motor at half its range.")
+@click.option("--max-force", "max_force", type=Number(0.01, 20.0, unit="N"), default=2.0,
+              show_default=True, help="Stop at this plate force, 0.01-20 N.")
+@click.option("--speed", "speed", type=Number(0.01, 100.0, unit="mm/s"), default=0.5,
+              show_default=True, help="Plate speed, 0.01-100 mm/s (the FE's: 0.5).")
+@click.option("--picture", "picture", default=None, metavar="OUT.png",
+              help="Also draw the pressed pad at the peak (offscreen, MUJOCO_GL=egl).")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def skin_flex_press(design, region, posture, max_force, speed, picture, as_json) -> None:
+    """Press a plate into a flex pad on one region of the prosthetic hand: force against
+    indentation, contact area and pressure (the flex representation, which the handshake
+    cannot run: softhand.hands.flex_region)."""
+    if picture is not None:
+        os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
+    from softhand.hands.flex_region import FLEX_REGIONS, press_flex_region
+    from softhand.skin.calibrate import skin_names
+    from softhand.skin.files import load_calibration
+
+    if design not in skin_names():
+        bad(f"--design {design!r} is unknown; allowed: {', '.join(skin_names())}")
+    if region not in FLEX_REGIONS:
+        bad(f"--region {region!r}: allowed {', '.join(FLEX_REGIONS)} (the palm and back are "
+            "meshes, not phalanges)")
+    try:
+        params = load_calibration(design).params("flex")
+    except (KeyError, ValueError) as exc:
+        bad(f"--design {design!r}: no flex calibration ({exc})")
+    picture = checked_file(picture, "--picture", ".png")
+    with progress_bar(f"{design} flex on {region}", disable=as_json) as update:
+        press = press_flex_region(params, region, posture, speed_mm_s=speed,
+                                  max_force_N=max_force, progress=update)
+    c = press.curve
+    peak = float(c.force_N.max())
+    marks = [f for f in (0.5, 1.0, 2.0, max_force) if f <= peak]
+    out = {"design": design, "region": region, "posture": posture, "speed_mm_s": speed,
+           "peak_force_N": peak, "indentation_at_peak_mm": float(c.displacement_mm[-1]),
+           "contact_area_mm2": {f"{f:g}": press.area_at(f) for f in dict.fromkeys(marks)},
+           "peak_pressure_kPa": float(press.patch.pressure_kPa.max(initial=0.0)),
+           "step_us": c.stats["step_us"], "dofs": c.stats["nv"],
+           "time_s": c.time_s.tolist(), "indentation_mm": c.displacement_mm.tolist(),
+           "force_N": c.force_N.tolist(),
+           "pressure_points_mm": press.patch.points_mm.tolist(),
+           "pressure_kPa": press.patch.pressure_kPa.tolist()}
+    if as_json:
+        click.echo(json.dumps(out))
+        return
+    click.echo(f"{design} flex pad on {region} ({posture}), {speed:g} mm/s: "
+               f"{peak:.3f} N at {out['indentation_at_peak_mm']:.3f} mm of indentation"
+               + ("" if peak >= max_force * 0.999 else
+                  f" (the pad peaked before {max_force:g} N: SVK softens in deep compression)"))
+    for f, (lo, hi) in out["contact_area_mm2"].items():
+        click.echo(f"  contact area at {f} N: {lo:.1f}-{hi:.1f} mm^2 (the mesh's bounds)")
+    click.echo(f"  peak pressure {out['peak_pressure_kPa']:.1f} kPa; {out['step_us']:.0f} us "
+               f"per step, {out['dofs']} dofs")
+    if picture is not None:
+        from softhand.viz.render import CameraView, render_state
+
+        view = CameraView(lookat=tuple(press.lookat_m), distance_m=0.08, azimuth_deg=-90.0,
+                          elevation_deg=-10.0)  # from the radial side, the palm down
+        empty = np.zeros((0, 3)), np.zeros((0, 4))
+        click.echo(f"wrote {render_state(press.model, press.qpos, *empty, picture, view=view)}")
+
+
 @main.command("handshake")
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
 @click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN[@REPRESENTATION]",
@@ -596,6 +668,20 @@ def bench_sensors(out_dir, designs, no_handshake) -> None:
             bad(f"--design {d!r} is unknown; allowed: {', '.join(DESIGNS)}")
     click.echo(run_sensor_table(out, designs=tuple(dict.fromkeys(designs)) or None,
                                 handshakes=not no_handshake))
+
+
+@bench.command("flex")
+@_OPT_REPORTS
+def bench_flex(out_dir) -> None:
+    """A flex pad on the prosthetic fingertip against the flex rig and the FE (~5 min)."""
+    from softhand.bench.flex import run_flex_bench
+
+    out = checked_dir(out_dir, "--out")
+    with progress_bar("bench flex", disable=False) as update:
+        data = run_flex_bench(out, progress=update)
+    from softhand.bench.flex import markdown
+
+    click.echo(markdown(data))
 
 
 @main.group()

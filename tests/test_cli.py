@@ -22,8 +22,9 @@ def test_indent_json_has_the_contract_keys(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     for key in ("design", "displacement_at_2N_mm", "force_at_2mm_N", "wall_s", "time_s",
-                "displacement_mm", "force_N"):
+                "displacement_mm", "force_N", "contact_area_mm2"):
         assert key in data
+    assert len(data["contact_area_mm2"]) == len(data["time_s"])
     assert data["design"] == "solid-pu" and data["force_at_2mm_N"] is None
     assert 0.2 < data["displacement_at_2N_mm"] < 0.6
     assert len(data["time_s"]) == len(data["force_N"]) == len(data["displacement_mm"])
@@ -32,6 +33,19 @@ def test_indent_json_has_the_contract_keys(tmp_path):
     assert prov["solver_version"] and prov["git_revision"] and prov["mesh_sizes"]["solid-pu"]
     assert prov["mesh_spec"]["n_top"] >= 1  # the element counts, not only the level's name
     assert (tmp_path / "solid-pu.csv").read_text().startswith("time_s,displacement_mm,force_N")
+
+
+def test_flex_press_json_reports_force_area_and_pressure():
+    res = run(["skin", "flex-press", "--design", "solid-pu", "--speed", "5", "--posture",
+               "flexed", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert data["peak_force_N"] >= 2.0 and data["region"] == "Index3"
+    assert 0.35 < data["indentation_at_peak_mm"] < 0.5  # the rig's pad: 0.43 mm at 2 N
+    lo, hi = data["contact_area_mm2"]["2"]
+    assert 0 < lo <= hi
+    assert len(data["pressure_kPa"]) == len(data["pressure_points_mm"]) > 0
+    assert len(data["force_N"]) == len(data["indentation_mm"]) == len(data["time_s"])
 
 
 def test_sweep_writes_curves_summary_and_plot(tmp_path):

@@ -192,6 +192,10 @@ def test_geometry_overrides(args, needles):
       "index_tip=solid-pu", "--max-force", "50"], ["'--max-force'", "0.5 <= x <= 20 N"]),
     (["skin", "apply", "no_such_hand.xml", "x.xml", "--geom", "index_tip=solid-pu"],
      ["HAND 'no_such_hand.xml'"]),
+    (["skin", "flex-press", "--region", "Palm1"], ["--region 'Palm1'", "Index3"]),
+    (["skin", "flex-press", "--design", "rubber"], ["--design 'rubber'", "pocket2-sil"]),
+    (["skin", "flex-press", "--speed", "0"], ["'--speed'", "0.01 <= x <= 100 mm/s"]),
+    (["skin", "flex-press", "--max-force", "25"], ["'--max-force'", "0.01 <= x <= 20 N"]),
 ])
 def test_unknown_names(args, needles):
     rejected(args, *needles)

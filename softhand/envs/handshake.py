@@ -144,7 +144,8 @@ class HandshakeEnv(gym.Env):
       HandshakeRun.relaxation() measures each pad against the QLV law;
     * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
 
-    ``flex`` is rig-only (it is calibrated on a block, not on a hand's capsules).
+    ``flex`` is refused: it needs the ``discrete`` integrator, under which the soft contacts do
+    not hold; a flex region has its own scene (softhand.hands.flex_region).
 
     Args:
         design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or

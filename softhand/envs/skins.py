@@ -46,7 +46,7 @@ class CalibratedRangeWarning(UserWarning):
 
 DEFAULT_DESIGN = "pocket2-sil"  # the most lifelike design (calibration/skins/index.json ranking)
 DEFAULT_REPRESENTATION = "soft-contact"
-#: the representations a hand takes (softhand.skin.representations: flex is rig-only)
+#: the representations the handshake takes (flex needs its own scene: softhand.hands.flex_region)
 HAND_REPRESENTATIONS = tuple(n for n, r in REPRESENTATIONS.items() if r.not_on_hand is None)
 #: outward normal of each prosthetic skin geom's contact side in its body's frame: palmar (-z)
 #: for the phalanges, the palm and the thenar, dorsal (+z) for the back of the hand

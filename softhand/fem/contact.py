@@ -32,11 +32,16 @@ __all__ = ["GapSet", "plate_gaps", "pocket_gaps"]
 
 @dataclass(frozen=True)
 class GapSet:
-    """A linear gap function at surface Gauss points: g = g0 + G u (mm)."""
+    """A linear gap function at surface Gauss points: g = g0 + G u (mm).
+
+    ``weight`` is each point's share of the undeformed surface (mm^2; mm in plane strain),
+    ``points`` its undeformed position (mm), where known.
+    """
 
     g0: np.ndarray
     G: sp.csr_matrix
     weight: np.ndarray
+    points: np.ndarray | None = None
 
     @property
     def size(self) -> int:
@@ -48,6 +53,15 @@ class GapSet:
     def force(self, u: np.ndarray, penalty: float, shift: float = 0.0) -> float:
         """Contact force on the modelled part (N; N/mm in plane strain) of this set."""
         return float(penalty * (self.weight * np.maximum(-self.gaps(u, shift), 0.0)).sum())
+
+    def pressure(self, u: np.ndarray, penalty: float, shift: float = 0.0) -> np.ndarray:
+        """Contact pressure at each point (MPa = N/mm^2): the penalty times the overlap."""
+        return penalty * np.maximum(-self.gaps(u, shift), 0.0)
+
+    def contact_area(self, u: np.ndarray, shift: float = 0.0) -> float:
+        """Undeformed surface in contact (mm^2 of the modelled part; mm in plane strain): the
+        weights of the points whose gap is closed. Resolution: one Gauss point's weight."""
+        return float(self.weight[self.gaps(u, shift) < 0.0].sum())
 
     def add(self, u: np.ndarray, penalty: float, shift: float = 0.0):
         """Residual vector and tangent matrix contributions, and the number of closed points."""
@@ -95,7 +109,8 @@ def plate_gaps(mesh: Mesh, top_mm: float, n_gauss: int = 4) -> GapSet:
     down = np.zeros(pos.shape)
     down[..., 1] = 1.0
     G = _gap_matrix(mesh, mesh.outer_faces, N, down, -1.0)
-    return GapSet((top_mm - pos[..., 1]).ravel(), G, weight.ravel())
+    return GapSet((top_mm - pos[..., 1]).ravel(), G, weight.ravel(),
+                  pos.reshape(-1, mesh.dim))
 
 
 def pocket_gaps(mesh: Mesh, n_gauss: int = 4) -> GapSet | None:

@@ -166,6 +166,13 @@ class IndentationResult:
         n_dofs, n_elements: model size.
         embedded_sensors: per sensor patch name: ``placement``, ``area_mm2`` and ``force_N``
             (aligned with ``time_s``; :mod:`softhand.fem.sensors`).
+        contact_area_mm2: the plate's contact area on the whole phalanx (undeformed surface,
+            mm^2), aligned with ``time_s``; the contact Gauss points whose gap is closed, so its
+            resolution is one point's share of a face (:meth:`GapSet.contact_area`).
+        plate_pressure: the plate's contact pressure at the end of the ramp (the peak force):
+            ``points_mm`` (undeformed positions of the modelled part's plate-face Gauss points,
+            x across the width, y up, z along the length in 3D), ``pressure_MPa`` at each,
+            ``force_N`` and ``displacement_mm`` of that state. Empty if the ramp took no step.
     """
 
     design: str
@@ -180,6 +187,8 @@ class IndentationResult:
     n_dofs: int
     n_elements: int
     embedded_sensors: dict[str, dict[str, Any]] = field(default_factory=dict)
+    contact_area_mm2: np.ndarray | None = None
+    plate_pressure: dict[str, Any] = field(default_factory=dict)
 
     def displacement_at(self, force_N: float) -> float | None:
         """Plate displacement (mm) where the ramp first reaches ``force_N``, or None."""
@@ -233,6 +242,8 @@ class IndentationResult:
             "time_s": self.time_s.tolist(),
             "displacement_mm": self.displacement_mm.tolist(),
             "force_N": self.force_N.tolist(),
+            "contact_area_mm2": (None if self.contact_area_mm2 is None
+                                 else self.contact_area_mm2.tolist()),
             "embedded_sensors": {name: {"placement": v["placement"], "area_mm2": v["area_mm2"],
                                         "force_N": np.asarray(v["force_N"]).tolist()}
                                  for name, v in self.embedded_sensors.items()},
@@ -280,6 +291,15 @@ class _Model:
 
     def plate_force(self, u: np.ndarray, d: float) -> float:
         return self.plate.force(u, self.penalty, -d) * self.scale
+
+    def plate_area(self, u: np.ndarray, d: float) -> float:
+        """Contact area on the whole phalanx, mm^2 (2D: the contact width times the length)."""
+        return self.plate.contact_area(u, -d) * self.scale
+
+    def plate_pressure(self, u: np.ndarray, d: float, F: float) -> dict[str, Any]:
+        return {"points_mm": self.plate.points.copy(),
+                "pressure_MPa": self.plate.pressure(u, self.penalty, -d),
+                "force_N": F, "displacement_mm": d}
 
     def newton(self, u0: np.ndarray, state: ElementState, dt: float, d: float, tol_N: float):
         """Solve one step; return (u, new_state, iterations, residual history, contact counts)."""
@@ -375,7 +395,8 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
     u_old = u.copy()
     state = model.asm.initial_state()
     t, d, F = 0.0, 0.0, 0.0
-    times, disps, forces, holds = [0.0], [0.0], [0.0], [False]
+    times, disps, forces, holds, areas = [0.0], [0.0], [0.0], [False], [0.0]
+    pressure: dict[str, Any] = {}
     readings = {p.label: [0.0] for p in model.sensors.patches}
     log: list[dict] = []
     dd, dd_prev, k_est = 0.02, None, None
@@ -395,6 +416,7 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
         disps.append(d)
         forces.append(F)
         holds.append(phase == "hold")
+        areas.append(model.plate_area(u, d))
         for name, value in model.read_sensors(u).items():
             readings[name].append(value)
 
@@ -442,6 +464,8 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
         if progress:
             progress(0.8 * min(1.0, max(F / s.max_force_N, d / s.max_depth_mm)))
 
+    if len(times) > 1:
+        pressure = model.plate_pressure(u, d, F)
     # --- hold ----------------------------------------------------------------------------
     if do_hold:
         t_end = t + s.hold_s
@@ -479,4 +503,5 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
                                     "area_mm2": model.sensors.area_mm2[p.label],
                                     "force_N": np.array(readings[p.label])}
                           for p in model.sensors.patches},
+        contact_area_mm2=np.array(areas), plate_pressure=pressure,
     )

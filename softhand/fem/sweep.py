@@ -154,7 +154,8 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
         atomic_write_text(out / f"{name}.csv", text)
         hashes[name] = hashlib.sha256(text.encode()).hexdigest()
         summaries[name] = {k: v for k, v in r.summary().items()
-                           if k not in ("time_s", "displacement_mm", "force_N")}
+                           if k not in ("time_s", "displacement_mm", "force_N",
+                                        "contact_area_mm2")}
     first = next(iter(results.values()))
     settings = asdict(first.settings)
     summary = {

@@ -30,7 +30,7 @@ skin pads on an :class:`mujoco.MjSpec`:
 * representations: ``soft-contact`` (default) and ``rigid`` (the stock contact, kept as a pair
   for comparison). A relaxation pad needs the skin's outward normal and a body of its own
   (:func:`softhand.skin.representations.add_hand_pad` does that for a known normal);
-  ``flex`` is rig-only.
+  ``flex`` needs the ``discrete`` integrator (softhand.hands.flex_region).
 
 The result is plain MJCF: :func:`write_skinned` writes ``spec.to_xml()`` with a header comment
 that records the designs, laws and the softhand version, and plain MuJoCo loads it.
@@ -196,7 +196,8 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
             raise ValueError(f"representation {rep!r} for geom {geom} is not written by skin "
                              f"apply (allowed: {', '.join(APPLY_REPRESENTATIONS)}): a relaxation "
                              "pad needs its own body along the skin's normal "
-                             "(softhand.skin.representations.add_hand_pad), flex is rig-only")
+                             "(softhand.skin.representations.add_hand_pad), a flex pad its own "
+                             "scene (softhand.hands.flex_region)")
     root = _subtree_root(spec, [spec.geom(g).parent for g in chosen])
     hand = _subtree_geoms(root)
     if against is None:

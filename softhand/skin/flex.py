@@ -51,8 +51,9 @@ from scipy.optimize import least_squares
 
 from softhand.laws.fit import Curve, FitStatus, fit_status
 
-__all__ = ["FlexFit", "FlexPadParams", "build_flex_rig", "fit_flex", "flex_cost_ratio",
-           "plate_force", "simulate_flex_indentation"]
+__all__ = ["CONTACT_BIT", "ContactPatch", "FlexFit", "FlexPadParams", "add_flex_pad",
+           "build_flex_rig", "contact_patch", "fit_flex", "flex_cost_ratio", "plate_force",
+           "set_flex_options", "simulate_flex_indentation"]
 
 _PLATE_GEOM = "plate"
 _PLATE_JOINT = "plate_z"
@@ -62,6 +63,8 @@ _SERVO_HZ = 500.0  # plate servo natural frequency: kp = m (2 pi f)^2, criticall
 _SOLIMP = (0.9999, 0.9999, 1e-4, 0.5, 2.0)  # maximal impedance: contact penetration of micrometres
 _MATERIALS = {"svk": 0, "snh": 1}  # mjsFlex.elastic3d
 _CONTACT_STEPS = 2.0  # contact solref time constant in timesteps; 1 chatters (one point per tet)
+#: contype/conaffinity bit shared by the pad and its plate only (a hand's geoms use bits 1, 2)
+CONTACT_BIT = 4
 
 
 def _check(name: str, value: float, lo: float, hi: float) -> None:
@@ -178,29 +181,84 @@ def _pad_mesh(p: FlexPadParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     return nodes, tets, np.isin(np.arange(nodes.shape[0]), idx[:, :, 0]), mass
 
 
-def _add_plate(spec: mujoco.MjSpec, *, top_m: float, plate_mass_kg: float, timestep: float) -> None:
+def _add_plate(spec: mujoco.MjSpec, *, pos, quat=(1.0, 0.0, 0.0, 0.0), plate_mass_kg: float,
+               timestep: float) -> None:
+    """A plate body at ``pos`` / ``quat`` (world) whose bottom face is its frame's xy plane,
+    sliding along its z (joint ``plate_z``; negative qpos presses), driven by a servo."""
     hx, hy, hz = (s * 1e-3 for s in _PLATE_HALF_MM)
-    body = spec.worldbody.add_body(name="plate", pos=[0.0, 0.0, top_m])
+    body = spec.worldbody.add_body(name="plate", pos=list(pos), quat=list(quat))
     body.add_joint(name=_PLATE_JOINT, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0.0, 0.0, 1.0])
     body.add_geom(name=_PLATE_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX, size=[hx, hy, hz],
-                  pos=[0.0, 0.0, hz], mass=plate_mass_kg, condim=1,
-                  solref=[_CONTACT_STEPS * timestep, 1.0], solimp=list(_SOLIMP))
+                  pos=[0.0, 0.0, hz], mass=plate_mass_kg, condim=1, contype=CONTACT_BIT,
+                  conaffinity=CONTACT_BIT, solref=[_CONTACT_STEPS * timestep, 1.0],
+                  solimp=list(_SOLIMP), rgba=[0.55, 0.6, 0.7, 0.5])
     act = spec.add_actuator(name="plate_servo", target=_PLATE_JOINT,
                             trntype=mujoco.mjtTrn.mjTRN_JOINT)
     act.set_to_position(kp=plate_mass_kg * (2 * np.pi * _SERVO_HZ) ** 2, dampratio=1.0)
 
 
-def _base_spec(timestep: float) -> mujoco.MjSpec:
-    spec = mujoco.MjSpec()
-    spec.modelname = "softhand_flex_pad"
+def set_flex_options(spec: mujoco.MjSpec, timestep: float) -> None:
+    """The options a flex pad needs: the ``discrete`` integrator (the only one that integrates
+    flex elasticity, implicitly in position), Newton with tolerance 1e-6 (the manual's
+    Deformables advice; the M + h^2 K solve may need > 100 iterations), and MuJoCo's default
+    convex-collision tolerance of 1 um: each pad element meets the plate through the convex
+    collider, whose error enters the penetration (the contact penetrates ~15 um at 2 N); the
+    hand's 0.1 mm (:func:`softhand.hands.skeleton.new_spec`) made the pad 60 % stiffer at
+    0.4 mm."""
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
+    spec.option.ccd_tolerance = 1e-6
     spec.option.timestep = timestep
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    # Newton, tolerance 1e-6 (manual, Deformables); the M + h^2 K solve may need > 100 iterations
     spec.option.solver = mujoco.mjtSolver.mjSOL_NEWTON
     spec.option.tolerance = 1e-6
     spec.option.iterations = 400
+
+
+def _base_spec(timestep: float) -> mujoco.MjSpec:
+    spec = mujoco.MjSpec()
+    spec.modelname = "softhand_flex_pad"
+    set_flex_options(spec, timestep)
+    spec.option.gravity = [0.0, 0.0, 0.0]
     return spec
+
+
+def add_flex_pad(spec: mujoco.MjSpec, parent: mujoco.MjsBody, params: FlexPadParams, *,
+                 timestep: float, pos=(0.0, 0.0, 0.0), rot=None, name: str = _PAD) -> None:
+    """Add the pad as flex ``name`` on ``parent`` (the bone: its base nodes are pinned there).
+
+    The pad frame (x across the width, y along the length, z up from the base, origin at the
+    base centre) sits at ``pos`` (m) with rotation matrix ``rot`` (3x3, pad axes as columns)
+    in ``parent``'s frame. Every other node is a child body of ``parent`` with three slide
+    joints along ``parent``'s axes and its lumped mass, so the pad rides an articulated body.
+    The flex collides only with geoms that share :data:`CONTACT_BIT` (the plate's).
+    """
+    params.validate()
+    nodes, tets, pinned, mass = _pad_mesh(params)
+    rot = np.eye(3) if rot is None else np.asarray(rot, dtype=float)
+    nodes = np.asarray(pos, dtype=float) + nodes @ rot.T
+    vertbody, vert = [], []
+    for n, (p, pin) in enumerate(zip(nodes, pinned, strict=True)):
+        if pin:  # the bone: vertex fixed in the parent's frame
+            vertbody.append(parent.name)
+            vert.extend(p.tolist())
+            continue
+        inertia = mass[n] * 1e-8  # point mass; slide joints only, so rotation never enters
+        body = parent.add_body(name=f"{name}_{n}", pos=p.tolist(), mass=mass[n],
+                               inertia=[inertia] * 3, explicitinertial=True)
+        for axis in np.eye(3):
+            body.add_joint(type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis.tolist())
+        vertbody.append(body.name)
+        vert.extend([0.0, 0.0, 0.0])
+    flex = spec.add_flex()
+    for key, value in {
+        "name": name, "dim": 3, "radius": 0.0, "vertbody": vertbody, "vert": vert,
+        "elem": tets.ravel().tolist(), "young": params.young_Pa, "poisson": params.poisson,
+        "damping": params.damping, "elastic3d": _MATERIALS[params.material],
+        "selfcollide": mujoco.mjtFlexSelf.mjFLEXSELF_NONE, "condim": 1,
+        "contype": CONTACT_BIT, "conaffinity": CONTACT_BIT,
+        "solref": [_CONTACT_STEPS * timestep, 1.0], "solimp": list(_SOLIMP),
+        "rgba": [0.9, 0.7, 0.6, 1.0],
+    }.items():
+        setattr(flex, key, value)
 
 
 def build_flex_rig(params: FlexPadParams, *, plate_mass_kg: float = 0.02,
@@ -221,31 +279,9 @@ def build_flex_rig(params: FlexPadParams, *, plate_mass_kg: float = 0.02,
     params.validate()
     _check("plate_mass_kg", plate_mass_kg, 1e-4, 10.0)
     _check("timestep", timestep, 1e-5, 5e-3)
-    nodes, tets, pinned, mass = _pad_mesh(params)
     spec = _base_spec(timestep)
-    vertbody, vert = [], []
-    for n, (pos, pin) in enumerate(zip(nodes, pinned, strict=True)):
-        if pin:  # the bone: vertex fixed in the world frame
-            vertbody.append("world")
-            vert.extend(pos.tolist())
-            continue
-        inertia = mass[n] * 1e-8  # point mass; slide joints only, so rotation never enters
-        body = spec.worldbody.add_body(name=f"{_PAD}_{n}", pos=pos.tolist(), mass=mass[n],
-                                       inertia=[inertia] * 3, explicitinertial=True)
-        for axis in np.eye(3):
-            body.add_joint(type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis.tolist())
-        vertbody.append(body.name)
-        vert.extend([0.0, 0.0, 0.0])
-    flex = spec.add_flex()
-    for key, value in {
-        "name": _PAD, "dim": 3, "radius": 0.0, "vertbody": vertbody, "vert": vert,
-        "elem": tets.ravel().tolist(), "young": params.young_Pa, "poisson": params.poisson,
-        "damping": params.damping, "elastic3d": _MATERIALS[params.material],
-        "selfcollide": mujoco.mjtFlexSelf.mjFLEXSELF_NONE, "condim": 1,
-        "solref": [_CONTACT_STEPS * timestep, 1.0], "solimp": list(_SOLIMP),
-    }.items():
-        setattr(flex, key, value)
-    _add_plate(spec, top_m=float(nodes[:, 2].max()), plate_mass_kg=plate_mass_kg,
+    add_flex_pad(spec, spec.worldbody, params, timestep=timestep)
+    _add_plate(spec, pos=[0.0, 0.0, params.height_mm * 1e-3], plate_mass_kg=plate_mass_kg,
                timestep=timestep)
     return spec.compile()
 
@@ -258,6 +294,77 @@ def plate_force(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[float, floa
             mujoco.mj_contactForce(model, data, c, f6)
             total, pen = total + f6[0], max(pen, -data.contact[c].dist)
     return total, pen
+
+
+@dataclass(frozen=True)
+class ContactPatch:
+    """Where and how hard the plate presses the pad, at one instant.
+
+    Attributes:
+        force_N: sum of the plate's normal contact forces.
+        area_mm2: contact area, upper bound: each pad surface vertex within ``tol_mm`` of the
+            plate's face (or inside it) adds a third of the deformed area of every surface
+            triangle it belongs to (its tributary area), so the patch's rim counts whole.
+        inner_area_mm2: contact area, lower bound: the surface triangles whose three vertices
+            all touch. The two differ by the rim's cells: the mesh's resolution.
+        points_mm: (n, 2) in-contact vertices in the plate's frame (x across the pad's width,
+            y along its length, from the plate's centre).
+        pressure_kPa: (n,) each contact's normal force, given to the nearest in-contact vertex,
+            over that vertex's tributary area; ``sum(pressure * area) = force``.
+        tributary_mm2: (n,) each vertex's tributary area.
+    """
+
+    force_N: float
+    area_mm2: float
+    inner_area_mm2: float
+    points_mm: np.ndarray = field(repr=False)
+    pressure_kPa: np.ndarray = field(repr=False)
+    tributary_mm2: np.ndarray = field(repr=False)
+
+
+def contact_patch(model: mujoco.MjModel, data: mujoco.MjData, *, pad: str = _PAD,
+                  tol_mm: float = 0.02) -> ContactPatch:
+    """The plate's contact patch on flex ``pad`` (after ``mj_step`` or ``mj_forward``).
+
+    ``tol_mm`` (default 0.02 mm): how close to the plate a vertex counts as touching; the
+    contact itself penetrates about 0.015 mm at 2 N (module docstring), so 0.02 mm takes in
+    every loaded vertex and almost no unloaded one.
+    """
+    f = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_FLEX, pad)
+    if f < 0:
+        raise ValueError(f"flex {pad!r} is not in the model")
+    gid = model.geom(_PLATE_GEOM).id
+    adr, num = model.flex_vertadr[f], model.flex_vertnum[f]
+    xpos = data.flexvert_xpos[adr:adr + num]
+    frame = data.geom_xmat[gid].reshape(3, 3)
+    face = data.geom_xpos[gid] - frame[:, 2] * model.geom_size[gid, 2]
+    local = (xpos - face) @ frame  # plate frame: z < 0 below its pressing face (the pad side)
+    sadr, snum = model.flex_shelldataadr[f], model.flex_shellnum[f]
+    tri = model.flex_shell[sadr:sadr + 3 * snum].reshape(-1, 3)
+    e1, e2 = xpos[tri[:, 1]] - xpos[tri[:, 0]], xpos[tri[:, 2]] - xpos[tri[:, 0]]
+    tri_area = 0.5 * np.linalg.norm(np.cross(e1, e2), axis=1) * 1e6
+    tributary = np.zeros(num)
+    np.add.at(tributary, tri.ravel(), np.repeat(tri_area / 3.0, 3))
+    touching = np.flatnonzero((local[:, 2] * 1e3 >= -tol_mm) & (tributary > 0))
+    force = np.zeros(touching.size)
+    f6, total = np.zeros(6), 0.0
+    for c in range(data.ncon):
+        con = data.contact[c]
+        if gid not in con.geom or f not in con.flex:
+            continue
+        mujoco.mj_contactForce(model, data, c, f6)
+        total += f6[0]
+        if touching.size:
+            near = np.argmin(np.linalg.norm(xpos[touching] - con.pos, axis=1))
+            force[near] += f6[0]
+    area = tributary[touching]
+    whole = np.isin(tri, touching).all(axis=1)
+    return ContactPatch(force_N=float(total), area_mm2=float(area.sum()),
+                        inner_area_mm2=float(tri_area[whole].sum()),
+                        points_mm=local[touching, :2] * 1e3,
+                        pressure_kPa=np.divide(force, area, out=np.zeros_like(force),
+                                               where=area > 0) * 1e3,
+                        tributary_mm2=area)
 
 
 def _run_ramp(model: mujoco.MjModel, *, speed_mm_s: float, depth_mm: float,

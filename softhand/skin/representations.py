@@ -34,6 +34,12 @@ plate through a stiff contact, needs the ``discrete`` integrator instead). Under
 spring into its impedance: the rig's loading error went from 6 % to thousands of % of 2 N), so the
 hand stays on ``implicitfast``. The pad compresses along its normal only: a contact from the side
 of a phalanx meets the tissue's law alone.
+
+For the same reason a ``flex`` region lives in its own scene, the hand alone with one phalanx
+wearing the pad (:mod:`softhand.hands.flex_region`, ``softhand skin flex-press``): there the pad
+on the articulated finger gives the rig's curve to 0.05-0.61 % of 2 N in two postures (solid
+designs; ``softhand bench flex``), with its
+contact area and pressure (:func:`softhand.skin.flex.contact_patch`).
 """
 
 from __future__ import annotations
@@ -258,9 +264,9 @@ class Flex(Representation):
     name = "flex"
     not_on_hand = ("MuJoCo 4 integrates flex elasticity only under the discrete integrator, "
                    "under which the hand's calibrated soft contacts do not hold (thousands of % "
-                   "off in the rig); a flex pad is also calibrated on the rig's block, not on a "
-                   "hand's capsules, and costs about 340x a soft contact per step; use it in the "
-                   "rig, softhand.skin.flex")
+                   "off in the rig), so a flex region cannot join the handshake; press a flex "
+                   "pad on one phalanx of the hand with `softhand skin flex-press` "
+                   "(softhand.hands.flex_region): force, contact area and pressure")
 
     def parse(self, params, law, key="params"):
         from dataclasses import fields
