@@ -119,3 +119,22 @@ def test_a_pocket_spreads_two_newtons_over_a_larger_area(fe_runs):
     peak = {d: r.plate_pressure["pressure_MPa"].max() for d, r in fe_runs.items()}
     assert area["pocket2-sil"] > 1.5 * area["solid-sil"]  # default mesh: 78 against 34 mm^2
     assert peak["pocket2-sil"] < peak["solid-sil"]  # default mesh: 56 against 119 kPa
+
+
+def test_bench_flex_writes_its_report(tmp_path):
+    """``softhand bench flex`` on one design: the report's three files, its claims' numbers."""
+    import json
+
+    from softhand.bench.flex import run_flex_bench
+
+    data = run_flex_bench(tmp_path, designs=("solid-pu",))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "bench-flex.json", "bench-flex.md", "bench-flex.png"]
+    row = json.loads((tmp_path / "bench-flex.json").read_text())["rows"][0]
+    assert row == json.loads(json.dumps(data["rows"][0]))
+    for posture in POSTURES:
+        v = row["postures"][posture]
+        assert v["vs_rig_rms_pct_of_2N"] < 1.0  # README: 0.05 / 0.61 %
+        assert v["vs_fe_rms_pct_of_2N"] < 2.0  # README: 1.0 / 0.9 % (the flex fit's own error)
+        assert v["peak_N"] >= 2.0
+    assert "| solid-pu | extended |" in (tmp_path / "bench-flex.md").read_text()

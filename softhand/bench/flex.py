@@ -27,7 +27,7 @@ import numpy as np
 from softhand.bench.common import machine_info, machine_line
 from softhand.fem.solver import IndentationSettings, indent
 from softhand.hands.flex_region import press_flex_region
-from softhand.io import atomic_write_json, atomic_write_text
+from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paths import FE_DIR, REPORTS_DIR
 from softhand.skin.calibrate import fe_curves
@@ -135,11 +135,9 @@ def plot_pressure(rows: list[dict[str, Any]], path: Path) -> None:
         ax.legend(fontsize=7)
     fig.suptitle(f"Flex pad on the prosthetic {REGION} against the FE, {SPEED_MM_S} mm/s")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=100)
+    with atomic_open(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=100)
     plt.close(fig)
-    tmp.replace(path)
 
 
 def run_flex_bench(out_dir: str | Path = REPORTS_DIR, designs: tuple[str, ...] = DESIGNS,

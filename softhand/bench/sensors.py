@@ -33,7 +33,7 @@ import numpy as np
 from softhand.bench.common import machine_info, machine_line
 from softhand.fem import solver
 from softhand.fem.solver import IndentationSettings
-from softhand.io import atomic_write_json, atomic_write_text
+from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.paths import REPORTS_DIR, SENSORS_DIR, SKINS_DIR
 from softhand.sensors.transfer import SensorRecord, record_from_result
 
@@ -146,11 +146,9 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
                  "pocket is in tension) and fitted laws of a compression sensor (lines), "
                  "0.5 mm/s ramp")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=110)
+    with atomic_open(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110)
     plt.close(fig)
-    tmp.replace(path)
 
 
 DIGITS = ("Index", "Middle", "Ring", "Little")

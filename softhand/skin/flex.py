@@ -175,7 +175,12 @@ def _pad_mesh(p: FlexPadParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
         tets.append(np.stack(path, -1))
     nodes, tets = nodes * 1e-3, np.concatenate(tets)
     e = nodes[tets[:, 1:]] - nodes[tets[:, :1]]
-    vol = np.abs(np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2]))) / 6.0
+    signed = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2]))
+    # half the Kuhn tetrahedra come out left-handed: swap two corners so that every one has a
+    # positive volume (MuJoCo's convention; the force is the same to the bit)
+    flip = signed < 0
+    tets[flip, 1], tets[flip, 2] = tets[flip, 2].copy(), tets[flip, 1].copy()
+    vol = np.abs(signed) / 6.0
     mass = np.zeros(nodes.shape[0])  # lumped: a quarter of each tetrahedron to each corner
     np.add.at(mass, tets.ravel(), np.repeat(p.density_kg_m3 * vol / 4.0, 4))
     return nodes, tets, np.isin(np.arange(nodes.shape[0]), idx[:, :, 0]), mass
@@ -256,7 +261,7 @@ def add_flex_pad(spec: mujoco.MjSpec, parent: mujoco.MjsBody, params: FlexPadPar
         "selfcollide": mujoco.mjtFlexSelf.mjFLEXSELF_NONE, "condim": 1,
         "contype": CONTACT_BIT, "conaffinity": CONTACT_BIT,
         "solref": [_CONTACT_STEPS * timestep, 1.0], "solimp": list(_SOLIMP),
-        "rgba": [0.9, 0.7, 0.6, 1.0],
+        "rgba": [0.9, 0.7, 0.6, 1.0], "flatskin": True,  # smooth normals render it black
     }.items():
         setattr(flex, key, value)
 
