@@ -167,7 +167,7 @@ def test_geometry_overrides(args, needles):
     (["handshake", "--skin", "Palm1"], ["--skin 'Palm1'", "REGION=DESIGN"]),
     (["handshake", "--controller", "telepathy"], ["'--controller'", "'telepathy'"]),
     (["handshake", "--representation", "jelly"], ["--representation", "'jelly'", "soft-contact"]),
-    (["handshake", "--representation", "flex"], ["'flex' is not available on the hand",
+    (["handshake", "--representation", "flex"], ["'flex' is not available in the handshake", "flex-press",
                                                   "soft-contact+relaxation"]),
     (["handshake", "--skin", "Palm1=pocket2-pu@jelly"], ["region Palm1 'jelly'"]),
     (["handshake", "--skin", "Palm1=rigid@soft-contact"], ["'rigid'", "only the rigid"]),

@@ -98,7 +98,7 @@ def _hand_representation(name: str, what: str) -> str:
         raise ValueError(f"{what} {name!r} is unknown; allowed: {', '.join(HAND_REPRESENTATIONS)}")
     why = get_representation(name).not_on_hand
     if why:
-        raise ValueError(f"{what} {name!r} is not available on the hand ({why}); allowed: "
+        raise ValueError(f"{what} {name!r} is not available in the handshake ({why}); allowed: "
                          f"{', '.join(HAND_REPRESENTATIONS)}")
     return name
 

@@ -131,7 +131,8 @@ class Representation(ABC):
     name: ClassVar[str]
     #: the rig's integrator (RigSettings.integrator None picks it)
     rig_integrator: ClassVar[str] = "implicitfast"
-    #: None when the hands take it, else why not (one line, for the error message)
+    #: None when the handshake's hands take it as a skin geom, else why not (one line, for the
+    #: error message)
     not_on_hand: ClassVar[str | None] = None
 
     @abstractmethod
@@ -161,8 +162,8 @@ class Representation(ABC):
         """Make the skin geom ``geom`` of a hand this representation (default: the geom as it
         is). ``outward``: the skin's outward normal in the geom's body frame."""
         if self.not_on_hand:
-            raise ValueError(f"representation {self.name!r} is not available on a hand: "
-                             f"{self.not_on_hand}")
+            raise ValueError(f"representation {self.name!r} is not available on a hand's skin "
+                             f"geom: {self.not_on_hand}")
 
     def hand_pair_law(self, pair_law: SoftContactParams, tissue: SoftContactParams
                       ) -> SoftContactParams:
@@ -263,10 +264,10 @@ class Flex(Representation):
 
     name = "flex"
     not_on_hand = ("MuJoCo 4 integrates flex elasticity only under the discrete integrator, "
-                   "under which the hand's calibrated soft contacts do not hold (thousands of % "
-                   "off in the rig), so a flex region cannot join the handshake; press a flex "
-                   "pad on one phalanx of the hand with `softhand skin flex-press` "
-                   "(softhand.hands.flex_region): force, contact area and pressure")
+                   "where the handshake's calibrated soft contacts give 2.7-23x their force, and "
+                   "the tissue's law would act at each of the flex surface's tens of contact "
+                   "points; a flex pad on one phalanx of the hand has its own scene: `softhand "
+                   "skin flex-press` (softhand.hands.flex_region)")
 
     def parse(self, params, law, key="params"):
         from dataclasses import fields
