@@ -246,7 +246,8 @@ def add_flex_pad(spec: mujoco.MjSpec, parent: mujoco.MjsBody, params: FlexPadPar
             vertbody.append(parent.name)
             vert.extend(p.tolist())
             continue
-        inertia = mass[n] * 1e-8  # point mass; slide joints only, so rotation never enters
+        # point mass; slide joints only, so rotation never enters (MuJoCo's floor: 1e-15)
+        inertia = max(mass[n] * 1e-8, 1e-12)
         body = parent.add_body(name=f"{name}_{n}", pos=p.tolist(), mass=mass[n],
                                inertia=[inertia] * 3, explicitinertial=True)
         for axis in np.eye(3):
