@@ -120,20 +120,19 @@ def _set_posture(model: mujoco.MjModel, data: mujoco.MjData, region: str, postur
     """Put the region's digit in ``posture``: its motor's setpoint and joints, couplings solved."""
     digit = _digit(region)
     joint = _motor_joint(digit)
-    lo, hi = const.PROSTHETIC_RANGE_DEG[joint if digit != "thumb" else "thumb_mcp"]
+    lo, hi = const.PROSTHETIC_RANGE_DEG[joint]
     angle = 0.0 if posture == "extended" else math.radians(0.5 * (lo + hi))
     motor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR,
                               f"{prefix}{digit}_{'flex_' if digit == 'thumb' else ''}motor")
     driver = model.joint(f"{prefix}{digit}_{joint.split('_')[-1]}").id
     data.qpos[model.jnt_qposadr[driver]] = angle
-    for e in range(model.neq):  # joint couplings: follower = c0 + c1 * driver (+ ...)
+    for e in range(model.neq):  # joint couplings, in build order (a follower's lead comes first)
         if model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT:
             continue
         follower, lead = model.eq_obj1id[e], model.eq_obj2id[e]
-        if model.jnt_bodyid[follower] and model.joint(follower).name.startswith(f"{prefix}{digit}"):
+        if model.joint(follower).name.startswith(f"{prefix}{digit}_"):
             q = data.qpos[model.jnt_qposadr[lead]]
-            c = model.eq_data[e, :5]
-            data.qpos[model.jnt_qposadr[follower]] = c[0] + c[1] * q + c[2] * q**2 + c[3] * q**3
+            data.qpos[model.jnt_qposadr[follower]] = np.polyval(model.eq_data[e, 4::-1], q)
     data.act[model.actuator_actadr[motor]] = angle
     mujoco.mj_forward(model, data)
 
