@@ -353,16 +353,16 @@ def contact_patch(model: mujoco.MjModel, data: mujoco.MjData, *, pad: str = _PAD
     np.add.at(tributary, tri.ravel(), np.repeat(tri_area / 3.0, 3))
     touching = np.flatnonzero((local[:, 2] * 1e3 >= -tol_mm) & (tributary > 0))
     force = np.zeros(touching.size)
-    f6, total = np.zeros(6), 0.0
-    for c in range(data.ncon):
-        con = data.contact[c]
-        if gid not in con.geom or f not in con.flex:
-            continue
-        mujoco.mj_contactForce(model, data, c, f6)
-        total += f6[0]
-        if touching.size:
-            near = np.argmin(np.linalg.norm(xpos[touching] - con.pos, axis=1))
-            force[near] += f6[0]
+    n = data.ncon
+    con = data.contact
+    mine = ((con.geom[:n] == gid).any(axis=1) & (con.flex[:n] == f).any(axis=1)
+            & (con.efc_address[:n] >= 0))
+    # the pad's contacts are frictionless (condim 1): each is one row, its normal force
+    normal = data.efc_force[con.efc_address[:n][mine]]
+    total = float(normal.sum())
+    if touching.size and normal.size:
+        gap = con.pos[:n][mine][:, None, :] - xpos[touching][None, :, :]
+        np.add.at(force, np.argmin(np.einsum("cvk,cvk->cv", gap, gap), axis=1), normal)
     area = tributary[touching]
     whole = np.isin(tri, touching).all(axis=1)
     return ContactPatch(force_N=float(total), area_mm2=float(area.sum()),
