@@ -674,13 +674,11 @@ def bench_sensors(out_dir, designs, no_handshake) -> None:
 @_OPT_REPORTS
 def bench_flex(out_dir) -> None:
     """A flex pad on the prosthetic fingertip against the flex rig and the FE (~5 min)."""
-    from softhand.bench.flex import run_flex_bench
+    from softhand.bench.flex import markdown, run_flex_bench
 
     out = checked_dir(out_dir, "--out")
     with progress_bar("bench flex", disable=False) as update:
         data = run_flex_bench(out, progress=update)
-    from softhand.bench.flex import markdown
-
     click.echo(markdown(data))
 
 

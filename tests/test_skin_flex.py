@@ -141,3 +141,13 @@ def test_deep_press_stays_finite(material):
         assert c.force_N[-1] >= 20.0 and c.displacement_mm[-1] < 3.0
     else:
         assert f[-1] > 11.0 and c.force_N.max() > 15.0
+
+
+def test_flex_cost_ratio_times_the_pad_against_a_rigid_box():
+    """The cost report's function runs the same plate on the pad and on a rigid box."""
+    from softhand.skin.flex import flex_cost_ratio
+
+    ratio, flex_s, rigid_s = flex_cost_ratio(FlexPadParams(**COARSE), depth_mm=0.1)
+    assert flex_s > 0 and rigid_s > 0
+    assert ratio == pytest.approx(flex_s / rigid_s)
+    assert ratio > 1.0  # a coarse pad still costs more than one box (measured ~40x)

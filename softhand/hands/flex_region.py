@@ -37,10 +37,10 @@ from softhand.hands import constants as const
 from softhand.hands.prosthetic import REGION_SEGMENTS, build_prosthetic_hand, regions
 from softhand.laws.fit import Curve
 from softhand.skin.flex import (
-    CONTACT_BIT,
     ContactPatch,
     FlexPadParams,
     add_flex_pad,
+    add_plate,
     contact_patch,
     set_flex_options,
 )
@@ -93,19 +93,9 @@ def build_flex_region(params: FlexPadParams, region: str = "Index3", *,
     # pad frame in the phalanx's frame: width across (y), length along (x), height palmar (-z)
     rot = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
     add_flex_pad(spec, body, params, timestep=timestep, pos=centre, rot=rot, name=_PAD)
-    plate = spec.worldbody.add_body(name="plate")
-    plate.add_joint(name="plate_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0.0, 0.0, 1.0])
-    half = (0.012, 0.007, 0.001)
-    plate.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(half),
-                   pos=[0.0, 0.0, half[2]], mass=_PLATE_MASS_KG, condim=1,
-                   contype=CONTACT_BIT, conaffinity=CONTACT_BIT,
-                   solref=[2.0 * timestep, 1.0], solimp=[0.9999, 0.9999, 1e-4, 0.5, 2.0],
-                   rgba=[0.55, 0.6, 0.7, 0.5])
-    act = spec.add_actuator(name="plate_servo", target="plate_z",
-                            trntype=mujoco.mjtTrn.mjTRN_JOINT)
-    act.set_to_position(kp=_PLATE_MASS_KG * (2 * np.pi * 500.0) ** 2, dampratio=1.0)
+    add_plate(spec, pos=[0.0, 0.0, 0.0], plate_mass_kg=_PLATE_MASS_KG, timestep=timestep)
     body.add_site(name="flexpad_base", pos=centre.tolist(),
-                                  quat=_quat_of(rot).tolist(), group=4)
+                  quat=_quat_of(rot).tolist(), group=4)
     return spec.compile()
 
 

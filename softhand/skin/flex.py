@@ -51,7 +51,7 @@ from scipy.optimize import least_squares
 
 from softhand.laws.fit import Curve, FitStatus, fit_status
 
-__all__ = ["CONTACT_BIT", "ContactPatch", "FlexFit", "FlexPadParams", "add_flex_pad",
+__all__ = ["CONTACT_BIT", "ContactPatch", "FlexFit", "FlexPadParams", "add_flex_pad", "add_plate",
            "build_flex_rig", "contact_patch", "fit_flex", "flex_cost_ratio", "plate_force",
            "set_flex_options", "simulate_flex_indentation"]
 
@@ -186,8 +186,8 @@ def _pad_mesh(p: FlexPadParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     return nodes, tets, np.isin(np.arange(nodes.shape[0]), idx[:, :, 0]), mass
 
 
-def _add_plate(spec: mujoco.MjSpec, *, pos, quat=(1.0, 0.0, 0.0, 0.0), plate_mass_kg: float,
-               timestep: float) -> None:
+def add_plate(spec: mujoco.MjSpec, *, pos, quat=(1.0, 0.0, 0.0, 0.0), plate_mass_kg: float,
+              timestep: float) -> None:
     """A plate body at ``pos`` / ``quat`` (world) whose bottom face is its frame's xy plane,
     sliding along its z (joint ``plate_z``; negative qpos presses), driven by a servo."""
     hx, hy, hz = (s * 1e-3 for s in _PLATE_HALF_MM)
@@ -287,7 +287,7 @@ def build_flex_rig(params: FlexPadParams, *, plate_mass_kg: float = 0.02,
     _check("timestep", timestep, 1e-5, 5e-3)
     spec = _base_spec(timestep)
     add_flex_pad(spec, spec.worldbody, params, timestep=timestep)
-    _add_plate(spec, pos=[0.0, 0.0, params.height_mm * 1e-3], plate_mass_kg=plate_mass_kg,
+    add_plate(spec, pos=[0.0, 0.0, params.height_mm * 1e-3], plate_mass_kg=plate_mass_kg,
                timestep=timestep)
     return spec.compile()
 
@@ -513,7 +513,7 @@ def flex_cost_ratio(params: FlexPadParams | None = None, *, timestep: float = 1e
     spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, half[2]],
                             condim=1, solref=[_CONTACT_STEPS * timestep, 1.0],
                             solimp=list(_SOLIMP))
-    _add_plate(spec, top_m=2 * half[2], plate_mass_kg=0.02, timestep=timestep)
+    add_plate(spec, pos=[0.0, 0.0, 2 * half[2]], plate_mass_kg=0.02, timestep=timestep)
     rigid = _run_ramp(spec.compile(), speed_mm_s=speed_mm_s, depth_mm=depth_mm, max_force_N=None)
     a, b = (c.stats["step_wall_s"] / c.stats["steps"] for c in (flex, rigid))
     return a / b, a, b
