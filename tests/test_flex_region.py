@@ -18,6 +18,9 @@ from softhand.skin.flex import simulate_flex_indentation
 
 SPEED = 2.0  # mm/s: the pad has no memory but its small Rayleigh damping; fast enough for CI
 
+# slow: the tests on the rig and hand presses (~8 s), on the two 3D default-mesh FE runs (~1 min)
+# and the bench (~45 s); the input checks and the 2D gap-set identity stay in the fast loop
+
 
 @pytest.fixture(scope="module")
 def pad():
@@ -34,6 +37,7 @@ def presses(pad):
     return {p: press_flex_region(pad, "Index3", p, speed_mm_s=SPEED) for p in POSTURES}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("posture", POSTURES)
 def test_flex_on_the_hand_is_the_rig_pad_in_every_posture(presses, rig, posture):
     c = presses[posture].curve
@@ -43,6 +47,7 @@ def test_flex_on_the_hand_is_the_rig_pad_in_every_posture(presses, rig, posture)
     assert err < 1.0  # measured 0.29 (extended) and 0.62 % (flexed) of 2 N
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("posture", POSTURES)
 def test_contact_patch_integrates_to_the_plate_force(presses, posture):
     press = presses[posture]
@@ -80,6 +85,7 @@ def fe_runs():
     return {d: indent(d, s) for d in ("solid-sil", "pocket2-sil")}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["solid-sil", "pocket2-sil"])
 def test_fe_pressure_integrates_to_the_plate_force(fe_runs, design):
     r = fe_runs[design]
@@ -113,6 +119,7 @@ def test_fe_gap_set_pressure_times_weight_is_the_force():
     assert gaps.contact_area(u, 0.0) == 0.0
 
 
+@pytest.mark.slow
 def test_a_pocket_spreads_two_newtons_over_a_larger_area(fe_runs):
     """The paper's argument for compliant skins, measured on the FE's contact patch."""
     area = {d: float(np.interp(2.0, r.force_N, r.contact_area_mm2)) for d, r in fe_runs.items()}
@@ -121,6 +128,7 @@ def test_a_pocket_spreads_two_newtons_over_a_larger_area(fe_runs):
     assert peak["pocket2-sil"] < peak["solid-sil"]  # default mesh: 56 against 119 kPa
 
 
+@pytest.mark.slow
 def test_bench_flex_writes_its_report(tmp_path):
     """``softhand bench flex`` on one design: the report's three files, its claims' numbers."""
     import json
