@@ -163,7 +163,7 @@ def test_handshake_json_and_recording(tmp_path):
     res = run(["handshake", "--design", "pocket2-sil", "--skin", "Palm1=rigid", "--seed", "1",
                "--record", str(rrd), "--json"])
     assert res.exit_code == 0, res.output
-    data = json.loads(res.output)
+    data = json.loads(res.stdout)  # warnings go to stderr
     assert len(data["regions"]) == 18 and data["skins"]["Palm1"] == "rigid"
     assert all({"peak_N", "mean_N", "peak_area_mm2", "mean_area_mm2"} <= set(v)
                for v in data["regions"].values())

@@ -11,8 +11,8 @@ thumb flexion, thumb rotation; positive closes):
   forces); the thumb rotates to its handshake posture.
 * :class:`Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
   waiting for the partner"): per digit, close until the digit first touches the partner, then hold
-  that posture (the motors are not back-drivable) until the partner lets go; the thumb is not
-  rotated into opposition, it closes over the back of the partner's hand. The default of
+  that posture (the motors are not back-drivable) until the partner lets go; the thumb rotates to
+  the grasp's rotation and closes over the back of the partner's index metacarpal. The default of
   ``softhand handshake``, since it is the scenario of the paper's Fig. 4.
 
 The force-feedback controllers take ``signal``: ``contact`` (default) feeds them the true region
@@ -27,8 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from softhand.hands.constants import PARTNER
-
 __all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClose",
            "make_controller"]
 
@@ -42,15 +40,12 @@ def _check_signal(signal: str) -> None:
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 _GRIPPING = ("grip", "shake")
-#: Thumb rotation (palmar abduction) a controller holds while shaking hands (rad): the thumb lies
-#: over the back of the partner's hand instead of pointing into it (the same assumption as the
-#: partner's, softhand.hands.constants.PARTNER["handshake_thumb_abduction_deg"]).
-HANDSHAKE_THUMB_RAD = float(np.radians(PARTNER["handshake_thumb_abduction_deg"]))
-
-
 def _thumb_to_handshake(info: dict) -> float:
-    """Thumb-rotation speed command (in [-1, 1]) towards HANDSHAKE_THUMB_RAD."""
-    return float(np.clip(4.0 * (HANDSHAKE_THUMB_RAD - info["thumb_rotation_rad"]), -1.0, 1.0))
+    """Thumb-rotation speed command (in [-1, 1]) towards the grasp's thumb rotation
+    (``info["grasp_thumb_rotation_rad"]``, solved from the handshake's contacts, so that the thumb
+    lies over the back of the partner's index metacarpal instead of pointing into its palm)."""
+    return float(np.clip(4.0 * (info["grasp_thumb_rotation_rad"] - info["thumb_rotation_rad"]),
+                         -1.0, 1.0))
 
 
 @dataclass
@@ -120,7 +115,7 @@ class ForceRegulating:
 @dataclass
 class Neutral:
     """Close each digit at ``speed`` until its most loaded region exceeds ``touch_N``, then hold;
-    no thumb rotation."""
+    the thumb rotates to the grasp's rotation."""
 
     speed: float = 0.5
     touch_N: float = 0.3
@@ -145,7 +140,8 @@ class Neutral:
             touching = max(v for k, v in forces.items() if k.startswith(digit)) > self.touch_N
             self._held[i] |= touching
             a[i] = 0.0 if self._held[i] else self.speed
-        a[5] = 0.0  # the thumb stays lateral, over the back of the partner's hand: no opposition
+        # the thumb rotates towards the back of the partner's index metacarpal until it touches
+        a[5] = 0.0 if self._held[4] else _thumb_to_handshake(info)
         return a
 
 

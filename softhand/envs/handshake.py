@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from softhand.envs.models import skinned_scene_spec
-from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline
+from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline, partner_postures
 from softhand.envs.physics import MujocoPhysics
 from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
 from softhand.envs.skins import (
@@ -33,9 +33,11 @@ from softhand.hands import (
     partner_start_pose,
     prosthetic_actuators,
     regions,
+    solve_grasp,
 )
 from softhand.hands.config import TIMESTEP_RANGE_S
-from softhand.hands.constants import PARTNER
+from softhand.hands.grasp import PROSTHETIC_MOTOR_JOINTS
+from softhand.hands.partner import PARTNER_JOINTS
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
@@ -107,7 +109,7 @@ class HandshakeEnv(gym.Env):
     Reward (weights are constructor arguments, defaults in ``DEFAULT_REWARD_WEIGHTS``):
 
     * ``grip`` = -w_grip ((F_mean - F_h) / F_h)^2 while the partner grips or shakes, with F_mean the
-      mean force over touched regions (> 0.05 N) and F_h the partner's grip force (2.5 N, Melnyk et
+      mean force over touched regions (> 0.05 N) and F_h the partner's grip per phalanx (2.5 N, Melnyk et
       al. 2014, times ``squeeze``): a human-like, matched grip;
     * ``contact`` = +w_contact (touched regions / 18) in the same phases: a full-hand grip;
     * ``overload`` = -w_overload sum_i max(0, F_i - overload_N)^2 at all times;
@@ -126,7 +128,10 @@ class HandshakeEnv(gym.Env):
     ``sensor_readings_N`` (dict region -> N on the sensor patch), ``sensor_load_estimate_N``
     (dict region -> N: the load a calibrated read-out infers from the reading by inverting the
     transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, release,
-    return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (target).
+    return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (the target of the
+    partner's summed digit force: its sampled grip per phalanx times the phalanges that touch at
+    the grasp), ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
+    effort), ``grasp_thumb_rotation_rad`` (the solved grasp's prosthetic thumb rotation).
 
     Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
     region, ``skins`` values ``DESIGN@REPRESENTATION`` for one):
@@ -262,11 +267,13 @@ class HandshakeEnv(gym.Env):
         self._pro_act = np.array([m.actuator(a).id for a in prosthetic_actuators()])
         self._max_speed = m.actuator_ctrlrange[self._pro_act, 1].copy()
         hum = [m.actuator(a).id for a in partner_actuators()]
-        self._grip_act = np.array(hum[:5])
-        self._opp_act = hum[5]
+        self._grip_act = np.array(hum[:len(PARTNER_JOINTS)])
         self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
-        self._opp_max = min(float(m.actuator_ctrlrange[self._opp_act, 1]),
-                            np.radians(PARTNER["handshake_thumb_abduction_deg"]))
+        #: the handshake's grasp, solved from its contacts for these two hands (cached)
+        self.grasp = solve_grasp(self.config)
+        self._grip_phalanges = max(1, len(self.grasp.touching_phalanges))
+        self._grasp_thumb_rot = float(self.grasp.prosthetic_q[PROSTHETIC_MOTOR_JOINTS.index(
+            "thumb_rot")])
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         self._range = np.full((m.ngeom, m.ngeom), np.inf)
         self._pair_name = {}
@@ -302,12 +309,12 @@ class HandshakeEnv(gym.Env):
         phase = float(rng.uniform(0, 2 * np.pi)) if self.randomize else 0.0
         start, quat = partner_start_pose(self.config)
         contact, _ = partner_contact_pose(self.config)
-        # open: every joint of the digit at its neutral extension (summed flexion 0), not at the
-        # servo's lower limit, which would hyperextend the reaching hand to its joint limits
-        lo = np.maximum(m.actuator_ctrlrange[self._grip_act, 0], 0.0)
-        hi = m.actuator_ctrlrange[self._grip_act, 1]
+        # the grip: GRIP_FORCE_N per phalanx (a data glove's mean per sensor, Melnyk et al. 2014)
+        # on each phalanx that touches the other hand at the grasp, summed
         self._script = PartnerScript(self._timeline.scaled(factor), start, contact,
-                                     grip_force_N=grip, shake_phase=phase, flex_range=(lo, hi))
+                                     grip_force_N=grip * self._grip_phalanges, shake_phase=phase,
+                                     **partner_postures(self.grasp,
+                                                        m.actuator_ctrlrange[self._grip_act, 1]))
         # the mount's path at every physics step (a scripted arm: no feedback from the contacts)
         n_steps = int(np.ceil(self._script.timeline.total_s / m.opt.timestep)) + self.frame_skip
         self._mount = np.array([self._script.mount(k * m.opt.timestep) for k in range(n_steps)])
@@ -319,6 +326,7 @@ class HandshakeEnv(gym.Env):
         self._readings = self.sensors.reading
         self._saturated = 0
         self._beyond = 0
+        self._partner_grip = 0.0
         self._warned = set()
         self._ended = None
         return self._obs(), self._info({}, "reach")
@@ -348,13 +356,9 @@ class HandshakeEnv(gym.Env):
         ctrl[self._pro_act] = a * self._max_speed
         # the partner's grip acts once per action step (100 Hz by default), the arm every step
         t = physics.time
-        feel = physics.partner_feel()
-        touched = feel[feel > CONTACT_N]
-        mean = float(touched.mean()) if touched.size else 0.0
-        ctrl[self._grip_act] = script.grip(t, mean, opt.timestep * self.frame_skip)
-        # the thumb abducts to its handshake posture once the hands meet (abducted during the
-        # reach too, it pressed the prosthetic's back with 16 N in the neutral handshake)
-        ctrl[self._opp_act] = self._opp_max * (script.timeline.phase(t) in _GRIPPING)
+        grip = float(physics.partner_feel().sum())  # what the partner's digits press
+        ctrl[self._grip_act] = script.grip(t, grip, opt.timestep * self.frame_skip)
+        self._partner_grip = grip
         k, last = self._step_index, len(self._mount) - 1
         end = k + self.frame_skip
         physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
@@ -411,7 +415,7 @@ class HandshakeEnv(gym.Env):
                  "overload": -w["overload"] * float(over @ over),
                  "effort": -w["effort"] * float(a @ a)}
         if phase in _GRIPPING:
-            target = self._script.grip_force_N
+            target = self._script.grip_force_N / self._grip_phalanges  # per phalanx
             touched = f[f > CONTACT_N]
             mean = float(touched.mean()) if touched.size else 0.0
             terms["grip"] = -w["grip"] * ((mean - target) / target) ** 2
@@ -426,6 +430,9 @@ class HandshakeEnv(gym.Env):
                 "sensor_load_estimate_N": dict(zip(names, estimate.tolist(), strict=True)),
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
                 "partner_grip_N": self._script.grip_force_N if self._script else None,
+                "partner_grip_measured_N": self._partner_grip,
+                "partner_effort_rad": self._script.effort if self._script else 0.0,
                 "saturated_sensors": self._saturated,
                 "thumb_rotation_rad": float(self._qpos[self._thumb_rot_qpos]),
+                "grasp_thumb_rotation_rad": self._grasp_thumb_rot,
                 "contacts_beyond_range": self._beyond}

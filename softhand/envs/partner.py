@@ -13,12 +13,14 @@ release    fingers open, 0.35 s (the rest of the 1.96 s contact)
 return     mount goes back to its start pose, 0.75 s
 ========== ============================================================================
 
-Grip: the partner regulates the mean force its digits feel over the phalanges that touch the
-prosthesis (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors on
+Grip: the partner reaches with an open hand, closes to its grasp posture (solved from the
+handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impedance towards the
+grasp plus a flexion offset): it regulates the mean force its digits feel over the phalanges that
+touch the prosthesis (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors on
 the subjects' fingers did; the palm and thenar are left out, so that a push on the palm does not
 open the fingers) to 2.5 N (the average
 grip force measured with data gloves, Melnyk et al. 2014) times ``squeeze``; an integral
-controller moves the finger and thumb flexion targets. Shake amplitude: +-5 mm
+controller sets the effort. Shake amplitude: +-5 mm
 vertically (assumption: only the *relative* motion of the two hands is modelled; the arm's gross
 shake moves both hands together and is left out, "a scene models only what it needs").
 """
@@ -31,7 +33,10 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["PHASES", "PartnerScript", "Timeline"]
+from softhand.hands.grasp import Grasp
+from softhand.hands.partner import PARTNER_JOINTS
+
+__all__ = ["CLOSE_S", "MAX_EFFORT_RAD", "PHASES", "PartnerScript", "Timeline", "partner_postures"]
 
 PHASES = ("reach", "grip", "shake", "release", "return", "done")
 GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N
@@ -78,20 +83,40 @@ def _min_jerk(s: float) -> float:
     return s**3 * (10 - 15 * s + 6 * s * s)
 
 
+#: Time from the end of the reach to the grasp posture (s): the digits close over the other hand
+#: in the first part of the grip phase. assumption.
+CLOSE_S = 0.2
+#: Largest grip effort (rad of extra flexion target on every flexing digit joint). With the
+#: impedance of softhand.hands.partner it presses a phalanx with a few newtons: the regulator
+#: never needs it whole in a light handshake, so it does not saturate into a fist.
+MAX_EFFORT_RAD = 1.0
+
+
 class PartnerScript:
-    """Mount pose and grip targets of the partner at time t, with a grip-force regulator.
+    """Mount pose and digit joint targets of the partner at time t, with a grip-force regulator.
+
+    The partner reaches with an open hand (``open_q``), closes to its grasp posture (``grasp_q``,
+    solved from the handshake's contacts, softhand.hands.grasp) in CLOSE_S, then adds a grip
+    effort, a flexion offset on every flexing joint (``effort_dir``) that an integral controller
+    sets so that the force its digits feel follows ``grip_force_N``; on release the effort goes
+    and the hand opens.
 
     Args:
         timeline: phase durations.
         start_pos, contact_pos: mount positions (m); the orientation stays fixed.
-        grip_force_N: target mean force over the touched regions, > 0.
+        grip_force_N: target of the grip measure the env feeds grip(): the summed normal force
+            on the partner's phalanges, > 0.
         shake_phase: shake phase offset (rad).
-        flex_range: (open, closed) flexion targets of the partner's digit servos (rad).
+        open_q, grasp_q: joint targets (rad) of the open hand and of the grasp, one per digit servo.
+        effort_dir: per servo, 1 where the grip effort flexes the joint, 0 where it does not.
+        q_max: per servo, the largest target (rad): the joint's upper limit less the grasp's
+            margin, so that a digit that meets nothing does not curl onto its stop (a fist).
     """
 
     def __init__(self, timeline: Timeline, start_pos: np.ndarray, contact_pos: np.ndarray, *,
                  grip_force_N: float = GRIP_FORCE_N, shake_phase: float = 0.0,
-                 flex_range: tuple[np.ndarray, np.ndarray]) -> None:
+                 open_q: np.ndarray, grasp_q: np.ndarray, effort_dir: np.ndarray,
+                 q_max: np.ndarray) -> None:
         if not (np.isfinite(grip_force_N) and grip_force_N > 0):
             raise ValueError(f"grip_force_N = {grip_force_N!r} must be finite and > 0")
         self.timeline = timeline
@@ -99,8 +124,13 @@ class PartnerScript:
         self.contact = np.asarray(contact_pos, float)
         self.grip_force_N = float(grip_force_N)
         self.shake_phase = float(shake_phase)
-        self.open, self.closed = (np.asarray(x, float) for x in flex_range)
-        self.flex = self.open.copy()
+        self.open, self.grasp = np.asarray(open_q, float), np.asarray(grasp_q, float)
+        self.effort_dir = np.asarray(effort_dir, float)
+        self.q_max = np.asarray(q_max, float)
+        #: the grip effort (rad), the regulator's state
+        self.effort = 0.0
+        self._integral = 0.0
+        self._release_from: np.ndarray | None = None
 
     def mount(self, t: float) -> np.ndarray:
         tl = self.timeline
@@ -116,15 +146,43 @@ class PartnerScript:
             return pos
         return self.contact + _min_jerk((t - e[3]) / tl.return_s) * (self.start - self.contact)
 
-    def grip(self, t: float, mean_contact_force_N: float, dt: float) -> np.ndarray:
-        """Digit flexion targets: close until the grip force is reached, hold, then open."""
-        phase = self.timeline.phase(t)
-        span = self.closed - self.open
+    def grip(self, t: float, grip_force_N: float, dt: float) -> np.ndarray:
+        """Digit joint targets: open on the reach, close to the grasp, regulate, then open."""
+        tl = self.timeline
+        phase = tl.phase(t)
+        if phase == "reach":
+            return self.open.copy()
         if phase in ("grip", "shake"):
-            error = (self.grip_force_N - mean_contact_force_N) / self.grip_force_N
-            # integral action: full range in about 0.3 s at 100 % force error
-            self.flex = np.clip(self.flex + span * np.clip(error, -1.0, 1.0) * dt / 0.3,
-                                self.open, self.closed)
-        elif phase in ("release", "return", "done"):
-            self.flex = np.maximum(self.open, self.flex - span * dt / 0.2)
-        return self.flex
+            s = _min_jerk((t - tl.ends[0]) / CLOSE_S)
+            error = float(np.clip((self.grip_force_N - grip_force_N) / self.grip_force_N, -1, 1))
+            # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
+            # proportional part adds half of it
+            self._integral = float(np.clip(self._integral + MAX_EFFORT_RAD * error * dt / 0.1,
+                                           0.0, MAX_EFFORT_RAD))
+            self.effort = float(np.clip(self._integral + 0.5 * MAX_EFFORT_RAD * error, 0.0,
+                                        MAX_EFFORT_RAD))
+            q = np.minimum(self.open + s * (self.grasp - self.open)
+                           + self.effort * self.effort_dir, self.q_max)
+            self._release_from = q
+            return q
+        # release and after: the effort goes and the hand opens in 0.2 s
+        self.effort = self._integral = 0.0
+        held = self.grasp if self._release_from is None else self._release_from
+        s = _min_jerk((t - tl.ends[2]) / 0.2)
+        return held + s * (self.open - held)
+
+
+def partner_postures(grasp: Grasp, upper_rad: np.ndarray) -> dict[str, np.ndarray]:
+    """PartnerScript's postures for a grasp: ``grasp_q`` the solved posture; ``open_q`` the
+    reaching hand, fingers straight and the thumb extended at its grasp abduction (it passes over
+    the other hand's web space and closes onto its back); ``effort_dir`` 1 on every flexing joint
+    (all but the thumb's abduction); ``q_max`` the joints' upper limits ``upper_rad`` less the
+    grasp's limit margin (GraspSettings.limit_margin_deg)."""
+    grasp_q = np.asarray(grasp.partner_q, float)
+    open_q = np.zeros_like(grasp_q)
+    rot = PARTNER_JOINTS.index("thumb_rot")
+    open_q[rot] = grasp_q[rot]
+    effort_dir = np.ones_like(grasp_q)
+    effort_dir[rot] = 0.0
+    q_max = np.asarray(upper_rad, float) - np.radians(grasp.settings.limit_margin_deg)
+    return {"open_q": open_q, "grasp_q": grasp_q, "effort_dir": effort_dir, "q_max": q_max}

@@ -11,6 +11,7 @@
 """
 
 from softhand.hands.config import HandConfig, PartnerConfig, ProstheticConfig, SceneConfig
+from softhand.hands.grasp import Grasp, partner_contact_pose, partner_start_pose, solve_grasp
 from softhand.hands.layout import HandLayout, hand_layout
 from softhand.hands.mjcf import write_mjcf
 from softhand.hands.partner import (
@@ -26,9 +27,10 @@ from softhand.hands.prosthetic import (
     prosthetic_actuators,
     regions,
 )
-from softhand.hands.scene import partner_contact_pose, partner_start_pose, scene_spec
+from softhand.hands.scene import scene_spec
 
 __all__ = [
+    "Grasp",
     "HandConfig",
     "HandLayout",
     "PartnerConfig",
@@ -47,5 +49,6 @@ __all__ = [
     "prosthetic_actuators",
     "regions",
     "scene_spec",
+    "solve_grasp",
     "write_mjcf",
 ]

@@ -51,7 +51,9 @@ class HandConfig:
         palm_thickness_m: dorsal to palmar skin at the metacarpals (m). None: 0.16 x hand length
             (constants.PALM_THICKNESS_RATIO, an assumption).
         skin_thickness_m: soft layer over the rigid bone (m): bones are this much smaller than the
-            segment envelope, so skins and tissues touch first. Default 6 mm: deeper than the skin
+            segment envelope, so skins and tissues touch first. None (default): 6 mm, or the
+            thinnest phalanx envelope less a 1.2 mm bone radius where that is less (a small hand,
+            -2.5 SD of the paper's subjects). 6 mm: deeper than the skin
             and the human tissue each indent at a handshake's forces (pocket2-sil 2.7 mm and the
             human finger 3.7 mm at 2 N, so bones meet only past about 12 mm together); the
             paper's phalanx skins are 9 mm of elastomer on a rigid base (assumption for the hand).
@@ -61,7 +63,7 @@ class HandConfig:
     hand_length_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_length_mm"))
     hand_width_m: float = field(default_factory=lambda: _paper_mm("experimenter_hand_width_mm"))
     palm_thickness_m: float | None = None
-    skin_thickness_m: float = 0.006
+    skin_thickness_m: float | None = None
     density_kg_m3: float = const.DENSITY_KG_M3
 
     def __post_init__(self) -> None:
@@ -75,7 +77,8 @@ class HandConfig:
             )
         if self.palm_thickness_m is not None:
             _check("palm_thickness_m", self.palm_thickness_m, 0.01, 0.06, "m")
-        _check("skin_thickness_m", self.skin_thickness_m, 0.0, 0.3 * self.thickness_m, "m")
+        if self.skin_thickness_m is not None:
+            _check("skin_thickness_m", self.skin_thickness_m, 0.0, 0.3 * self.thickness_m, "m")
         _check("density_kg_m3", self.density_kg_m3, 100.0, 5000.0, "kg/m^3")
 
     @property
@@ -122,12 +125,10 @@ class PartnerConfig:
     Attributes:
         hand: anthropometry of the partner's hand.
         max_grip_force_n: maximal grip force (N); caps the finger flexion actuators.
-        finger_kp_nm_per_rad: flexion servo stiffness per radian of summed joint flexion (N m/rad).
-        thumb_kp_nm_per_rad: thumb opposition servo stiffness (N m/rad).
+        finger_kp_nm_per_rad: stiffness of an MCP joint's impedance servo (N m/rad); the other
+            digit joints get a share of it (softhand.hands.partner.JOINT_KP_SHARE).
         wrist_kp_nm_per_rad: wrist servo stiffness (N m/rad).
         wrist_torque_nm: wrist actuator torque limit (N m).
-        passive_stiffness_nm_per_rad: passive stiffness of an MCP-like joint (N m/rad); other joints
-            are scaled so that all joints of a free digit reach their limits together.
         joint_damping_nm_s_per_rad: damping of each finger joint (N m s/rad); the wrist has 10x.
         mechanical_time_constant_s: each partner joint gets armature = damping x this (kg m^2), so
             that no joint relaxes faster than the largest supported timestep (constants.PARTNER).
@@ -137,10 +138,8 @@ class PartnerConfig:
     hand: HandConfig = field(default_factory=HandConfig)
     max_grip_force_n: float = const.PARTNER["max_grip_force_n"]
     finger_kp_nm_per_rad: float = const.PARTNER["finger_kp_nm_per_rad"]
-    thumb_kp_nm_per_rad: float = const.PARTNER["thumb_kp_nm_per_rad"]
     wrist_kp_nm_per_rad: float = const.PARTNER["wrist_kp_nm_per_rad"]
     wrist_torque_nm: float = const.PARTNER["wrist_torque_nm"]
-    passive_stiffness_nm_per_rad: float = const.PARTNER["passive_stiffness_nm_per_rad"]
     joint_damping_nm_s_per_rad: float = const.PARTNER["joint_damping_nm_s_per_rad"]
     mechanical_time_constant_s: float = const.PARTNER["mechanical_time_constant_s"]
     forearm_length_m: float = 0.10
@@ -148,12 +147,8 @@ class PartnerConfig:
     def __post_init__(self) -> None:
         _check("max_grip_force_n", self.max_grip_force_n, 0.0, 2000.0, "N")
         _check("finger_kp_nm_per_rad", self.finger_kp_nm_per_rad, 0.0, 100.0, "N m/rad")
-        _check("thumb_kp_nm_per_rad", self.thumb_kp_nm_per_rad, 0.0, 100.0, "N m/rad")
         _check("wrist_kp_nm_per_rad", self.wrist_kp_nm_per_rad, 0.0, 1000.0, "N m/rad")
         _check("wrist_torque_nm", self.wrist_torque_nm, 0.0, 100.0, "N m")
-        _check(
-            "passive_stiffness_nm_per_rad", self.passive_stiffness_nm_per_rad, 0.0, 10.0, "N m/rad"
-        )
         _check(
             "joint_damping_nm_s_per_rad", self.joint_damping_nm_s_per_rad, 0.0, 10.0, "N m s/rad"
         )

@@ -259,21 +259,16 @@ PARTNER = MappingProxyType(
         # assumption: wrist stiffness of the gripping partner (N m/rad): holds the 0.4 kg hand
         # against gravity within a few degrees while the forearm mount shakes it.
         "wrist_kp_nm_per_rad": 5.0,
-        # assumption: finger flexion servo stiffness per radian of summed joint flexion (N m/rad).
+        # MCP joint stiffness of the gripping partner's impedance (N m/rad). The order of the
+        # finger's measured stiffness: fingertip stiffness of a few hundred N/m at light pinch
+        # forces (Hajian AZ, Howe RD 1997, J Biomech Eng 119(1):109-114: 200-800 N/m for 2-20 N)
+        # times a ~0.09 m lever squared gives 1.6-6.5 N m/rad; 1.0 is the relaxed end of it
+        # (assumption: a handshake grip is light, 2-3 N per phalanx).
         "finger_kp_nm_per_rad": 1.0,
-        # assumption: thumb opposition servo stiffness (N m/rad).
-        "thumb_kp_nm_per_rad": 1.0,
-        # assumption: weak passive joint stiffness (N m/rad) that shares a tendon pull between the
-        # joints of a digit, scaled so that all joints of a free digit reach their limits together.
-        "passive_stiffness_nm_per_rad": 0.02,
         # assumption: joint damping (N m s/rad) for the partner's finger joints; with the servo
         # torques above it bounds a free digit's flexion speed to ~20 rad/s, the order of fast
         # voluntary finger flexion.
         "joint_damping_nm_s_per_rad": 0.05,
-        # assumption: palmar abduction of the thumb while it holds the other hand in a handshake
-        # (deg): it lies over the back of the other hand's index metacarpal, not fully opposed
-        # (the [AAOS65] range ends at 70 deg, where the thumb would point into the other palm).
-        "handshake_thumb_abduction_deg": 35.0,
         # numerical, not anatomical: armature = damping x this time, on every partner joint. A
         # distal phalanx alone has ~2e-7 kg m^2 about its joint, so under the damping above its
         # motion relaxes in ~4 us: far below a 1 ms step. MuJoCo's constraint solver (mass matrix M)

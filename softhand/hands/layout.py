@@ -31,6 +31,9 @@ __all__ = ["DigitLayout", "HandLayout", "hand_layout"]
 
 #: Fraction of the W x t x palm-length slab filled by the palm (rounded edges). assumption.
 _PALM_FILL = 0.9
+#: Largest phalanx envelope diameter as a share of its length (the trimmed capsules of the
+#: envelope need length >= diameter). assumption.
+_LENGTH_FILL = 0.999
 #: Smallest bone capsule radius allowed under the skin (m).
 _MIN_BONE_RADIUS_M = 0.001
 
@@ -107,10 +110,27 @@ def _capsule_volume(radius: float, length: float, *, closed_end: bool) -> float:
     return math.pi * radius**2 * length
 
 
+#: Skin thickness when HandConfig.skin_thickness_m is None, where the hand's phalanges allow it
+#: (m).
+DEFAULT_SKIN_M = 0.006
+#: Bone radius kept under a default skin on the thinnest phalanx (m): the smallest allowed
+#: (_MIN_BONE_RADIUS_M) and 0.2 mm to spare. The paper's experimenter's hand keeps the 6 mm skin
+#: (its thinnest bone, the thumb's distal phalanx, is 1.35 mm in radius).
+_DEFAULT_MIN_BONE_RADIUS_M = 0.0012
+
+
 def hand_layout(config: HandConfig) -> HandLayout:
     """Derive joint positions, lengths, radii and masses of a right hand from ``config``."""
+    if config.skin_thickness_m is not None:
+        return _hand_layout(config, config.skin_thickness_m)
+    envelope = _hand_layout(config, 0.0)
+    thinnest = min(d.radii_m[s] for d in envelope.digits.values() for s in d.phalanges)
+    return _hand_layout(config, min(DEFAULT_SKIN_M, thinnest - _DEFAULT_MIN_BONE_RADIUS_M))
+
+
+def _hand_layout(config: HandConfig, skin: float) -> HandLayout:
     L, W = config.hand_length_m, config.hand_width_m
-    t, skin = config.thickness_m, config.skin_thickness_m
+    t = config.thickness_m
     rho = config.density_kg_m3
     scale = L / const.FINGERTIP_OFFSET_REFERENCE_LENGTH_M
     # finger metacarpal bone: a slender shaft in the palm's soft envelope (radius t / 2)
@@ -134,7 +154,12 @@ def hand_layout(config: HandConfig) -> HandLayout:
     # spacing of the MCP centres allows (adducted fingers' envelopes must not overlap).
     spacing = {f: min(abs(mcp_y[f] - mcp_y[g]) for g in const.FINGERS if g != f)
                for f in const.FINGERS}
-    r_pp = {f: min(0.5 * shares[f] / total * W, 0.5 * const.FINGER_SPACING_FILL * spacing[f])
+    # ... and no wider than its shortest phalanx allows: a trimmed capsule needs a length of at
+    # least its diameter (a short, wide hand: -2.5 SD length with +2.5 SD width, paper Table 1)
+    r_pp = {f: min(0.5 * shares[f] / total * W, 0.5 * const.FINGER_SPACING_FILL * spacing[f],
+                   _LENGTH_FILL * min(r * L / (2.0 * const.PHALANX_TAPER[s]) for r, s in zip(
+                       const.SEGMENT_LENGTH_RATIO[f][1:], ("proximal", "middle", "distal"),
+                       strict=True)))
             for f in const.FINGERS}
 
     digits: dict[str, DigitLayout] = {}

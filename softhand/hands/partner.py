@@ -5,22 +5,14 @@ angles): ``forearm`` (a rigid stub, no joints) then ``palm`` with two wrist join
 (``wrist_flex``: flexion positive; ``wrist_dev``: radial deviation positive), thumb and fingers
 with human joint ranges ([AAOS65], constants.AAOS_RANGE_DEG, hyperextension included).
 
-Actuation (8 position servos; ctrl is a target in rad):
-
-====================== =========================================================================
-``{finger}_flex`` x4   tendon ``{finger}_flexor`` = mcp + pip + dip (a flexor spanning the finger)
-``thumb_flex``         tendon ``thumb_flexor`` = cmc + mcp + ip
-``thumb_opp``          joint ``thumb_rot`` (palmar abduction / opposition)
-``wrist_flex``         joint ``wrist_flex``
-``wrist_dev``          joint ``wrist_dev``
-====================== =========================================================================
-
-A tendon servo pulls all joints of a digit at once; weak passive joint springs (stiffness inversely
-proportional to each joint's flexion range) share the pull so that a free digit curls with all
-joints reaching their limits together, while a digit that meets the other hand keeps curling
-around it (an enveloping grip). The finger servos are capped at the maximal grip force shared by four
-fingers acting at the proximal phalanx ([Mathiowetz85]); the grip force in a handshake comes from how
-far the scripted target lies beyond contact (kp x overshoot).
+Actuation: joint impedance, 18 position servos (ctrl is a target angle in rad): one per digit
+joint (``{prefix}{joint}`` for each of PARTNER_JOINTS: thumb rot, cmc, mcp, ip; each finger's mcp,
+pip, dip), then ``wrist_flex`` and ``wrist_dev``. The env's partner script
+(:mod:`softhand.envs.partner`) sets the targets: an open hand on the reach, the solved grasp
+posture (:mod:`softhand.hands.grasp`) plus a grip effort (a flexion offset on every digit joint,
+regulated to the sampled grip force) while it holds the other hand. A servo's stiffness is
+PartnerConfig.finger_kp_nm_per_rad x JOINT_KP_SHARE of its joint; torques are capped at the
+maximal grip force shared by four fingers acting at the proximal phalanx ([Mathiowetz85]).
 
 Contact geoms: ``tissue_{piece}`` (contype = conaffinity = 0: contacts only through explicit
 ``<pair>`` elements): the hand's soft envelope as one layer of convex pieces
@@ -36,6 +28,7 @@ touches it. Rigid bones (``bone_*``) collide with the prosthetic bones.
 from __future__ import annotations
 
 import math
+from types import MappingProxyType
 
 import mujoco
 
@@ -53,6 +46,8 @@ from softhand.hands.skeleton import (
 )
 
 __all__ = [
+    "JOINT_KP_SHARE",
+    "PARTNER_JOINTS",
     "TISSUE_SEGMENTS",
     "add_partner_hand",
     "build_partner_hand",
@@ -75,18 +70,24 @@ TISSUE_SEGMENTS: tuple[str, ...] = (
     *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
 )
 
+#: The partner's digit joints (short names), thumb first: the order of its digit servos.
+PARTNER_JOINTS: tuple[str, ...] = (
+    "thumb_rot", "thumb_cmc", "thumb_mcp", "thumb_ip",
+    *(f"{f}_{j}" for f in const.FINGERS for j in ("mcp", "pip", "dip")),
+)
+#: Stiffness of each joint's servo as a share of PartnerConfig.finger_kp_nm_per_rad. assumption: in
+#: proportion to the lever of a load on the digit's pad (a pad load 1/2 and 1/4 of the way from
+#: the tip loads the distal joints less), so that a grip effort flexes every joint alike.
+JOINT_KP_SHARE = MappingProxyType({"mcp": 1.0, "pip": 0.6, "dip": 0.35, "rot": 1.0, "cmc": 1.0,
+                                   "ip": 0.35})
+
 _DIGIT_JOINTS = {"thumb": ("cmc", "mcp", "ip"), **{f: ("mcp", "pip", "dip") for f in const.FINGERS}}
 
 
 def partner_actuators(prefix: str = "hum_") -> tuple[str, ...]:
-    """Names of the 8 partner servos, in ctrl order."""
-    return (
-        *(f"{prefix}{f}_flex" for f in const.FINGERS),
-        f"{prefix}thumb_flex",
-        f"{prefix}thumb_opp",
-        f"{prefix}wrist_flex",
-        f"{prefix}wrist_dev",
-    )
+    """Names of the 18 partner servos, in ctrl order: the digit joints (PARTNER_JOINTS), then
+    ``wrist_flex`` and ``wrist_dev``."""
+    return (*(f"{prefix}{j}" for j in PARTNER_JOINTS), f"{prefix}wrist_flex", f"{prefix}wrist_dev")
 
 
 def _servo(
@@ -146,20 +147,12 @@ def add_partner_hand(
             rgba=list(_BONE_RGBA),
         )
 
-    # Passive springs: k_j = k0 x 90 deg / (upper limit of joint j), so a free digit's joints
-    # reach their upper limits together under one tendon pull.
-    # Armature = damping x mechanical time constant (constants.PARTNER: why).
-    k0, damping = config.passive_stiffness_nm_per_rad, config.joint_damping_nm_s_per_rad
+    # Armature = damping x mechanical time constant (constants.PARTNER: why). No passive springs:
+    # each joint's impedance is its servo (below).
+    damping = config.joint_damping_nm_s_per_rad
     armature = damping * config.mechanical_time_constant_s
-    options = {}
-    for digit, shorts in _DIGIT_JOINTS.items():
-        for short in shorts:
-            key = joint_key(digit, short)
-            options[key] = {
-                "stiffness": [k0 * 90.0 / rng[key][1], 0.0, 0.0],
-                "damping": [damping, 0.0, 0.0],
-                "armature": armature,
-            }
+    options = {joint_key(digit, short): {"damping": [damping, 0.0, 0.0], "armature": armature}
+               for digit, shorts in _DIGIT_JOINTS.items() for short in shorts}
     options["thumb_rot"] = {"damping": [damping, 0.0, 0.0], "armature": armature}
     skel = add_skeleton(
         spec,
@@ -193,37 +186,23 @@ def add_partner_hand(
                   conaffinity=0, mass=0.0, group=2, rgba=list(_TISSUE_RGBA))
         add_contact_sensor(spec, f"{prefix}feel_{name}", f"{prefix}tissue_{name}", netforce=True)
 
-    # Flexor tendons and servos.
+    # Joint impedance: one position servo per digit joint (ctrl = the joint's target angle), of
+    # stiffness finger_kp x the joint's lever share (JOINT_KP_SHARE), torque-capped at the maximal
+    # grip shared by four fingers acting at the proximal phalanx ([Mathiowetz85]).
     share = config.max_grip_force_n / const.PARTNER["grip_fingers"]
-    for digit in (*const.FINGERS, "thumb"):  # ctrl order of partner_actuators()
-        shorts = _DIGIT_JOINTS[digit]
-        tendon = spec.add_tendon(name=f"{prefix}{digit}_flexor")
-        for short in shorts:
-            tendon.wrap_joint(skel.joints[(digit, short)], 1.0)
-        lo = sum(math.radians(rng[joint_key(digit, s)][0]) for s in shorts)
-        hi = sum(math.radians(rng[joint_key(digit, s)][1]) for s in shorts)
+    for name in PARTNER_JOINTS:  # ctrl order of partner_actuators()
+        digit, short = name.split("_", 1)
+        lo, hi = (math.radians(v) for v in rng[joint_key(digit, short)])
         _servo(
             spec,
-            f"{prefix}{digit}_flex",
-            f"{prefix}{digit}_flexor",
-            mujoco.mjtTrn.mjTRN_TENDON,
-            kp=config.thumb_kp_nm_per_rad if digit == "thumb" else config.finger_kp_nm_per_rad,
+            f"{prefix}{name}",
+            skel.joints[(digit, short)],
+            mujoco.mjtTrn.mjTRN_JOINT,
+            kp=config.finger_kp_nm_per_rad * JOINT_KP_SHARE[short],
             lo=lo,
             hi=hi,
             torque=share * layout.digits[digit].lengths_m["proximal"],
         )
-    # Joint servos: thumb opposition and the wrist.
-    lo, hi = (math.radians(v) for v in rng["thumb_rot"])
-    _servo(
-        spec,
-        f"{prefix}thumb_opp",
-        skel.joints[("thumb", "rot")],
-        mujoco.mjtTrn.mjTRN_JOINT,
-        kp=config.thumb_kp_nm_per_rad,
-        lo=lo,
-        hi=hi,
-        torque=share * layout.digits["thumb"].lengths_m["proximal"],
-    )
     for short in ("flex", "dev"):
         lo, hi = (math.radians(v) for v in rng[f"wrist_{short}"])
         _servo(

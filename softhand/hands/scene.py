@@ -24,7 +24,7 @@ import mujoco
 import numpy as np
 
 from softhand.hands.config import SceneConfig
-from softhand.hands.layout import HandLayout, hand_layout
+from softhand.hands.layout import HandLayout
 from softhand.hands.partner import add_partner_hand
 from softhand.hands.prosthetic import add_prosthetic_hand
 from softhand.hands.skeleton import new_spec, quat_from_axes
@@ -40,9 +40,7 @@ ARM_MASS_KG = 0.3
 __all__ = [
     "ARM_MASS_KG",
     "ARM_TIMECONST_S",
-    "partner_contact_pose",
     "partner_quat",
-    "partner_start_pose",
     "prosthetic_quat",
     "scene_spec",
     "web_point",
@@ -82,39 +80,21 @@ def web_point(layout: HandLayout) -> np.ndarray:
                      index.base_m[1] + index.radii_m["metacarpal"], 0.0])
 
 
-def partner_contact_pose(config: SceneConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """World position (m) and quaternion of ``hum_base`` when the two hands are in full contact:
-    web spaces together, palmar surfaces touching, then SceneConfig.partner_contact_offset_m."""
-    config = config or SceneConfig()
-    pro = hand_layout(config.prosthetic.hand)
-    hum = hand_layout(config.partner.hand)
-    quat = partner_quat(config.crossing_angle_deg)
-    r_pro = _rotation(prosthetic_quat(config.crossing_angle_deg))
-    r_hum = _rotation(quat)
-    wrist = np.asarray(config.prosthetic_wrist_pos_m, float)
-    pos = wrist + r_pro @ web_point(pro) - r_hum @ web_point(hum)
-    pos[1] = wrist[1] + 0.5 * (pro.thickness_m + hum.thickness_m)  # palmar surfaces touch along Y
-    return pos + r_hum @ np.asarray(config.partner_contact_offset_m, float), quat
-
-
-def partner_start_pose(config: SceneConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """World position (m) and quaternion of ``hum_base`` at the start of a handshake."""
-    config = config or SceneConfig()
-    pos, quat = partner_contact_pose(config)
-    return pos + _rotation(quat) @ np.asarray(config.partner_start_offset_m, float), quat
-
-
 def _rotation(quat: np.ndarray) -> np.ndarray:
     mat = np.zeros(9)
     mujoco.mju_quat2Mat(mat, np.asarray(quat, float))
     return mat.reshape(3, 3)
 
 
-def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
+def scene_spec(config: SceneConfig | None = None, *,
+               partner_pose: tuple[np.ndarray, np.ndarray] | None = None) -> mujoco.MjSpec:
     """Build the handshake scene: options, both hands, the partner at its start pose.
 
     Args:
         config: the scene; default SceneConfig().
+        partner_pose: world position and quaternion of the partner's mount (its hand frame);
+            default: its start pose, SceneConfig.partner_start_offset_m from the solved grasp
+            (softhand.hands.grasp.partner_start_pose).
 
     Returns:
         A new MjSpec (not compiled).
@@ -135,7 +115,11 @@ def scene_spec(config: SceneConfig | None = None) -> mujoco.MjSpec:
         quat=prosthetic_quat(config.crossing_angle_deg).tolist(),
     )
     add_prosthetic_hand(spec, wrist, config.prosthetic, "pro_")
-    pos, quat = partner_start_pose(config)
+    if partner_pose is None:
+        from softhand.hands.grasp import partner_start_pose  # the grasp is solved on this scene
+
+        partner_pose = partner_start_pose(config)
+    pos, quat = (np.asarray(v, float) for v in partner_pose)
     spec.worldbody.add_body(name="hum_base", mocap=True, pos=pos.tolist(), quat=quat.tolist())
     # The partner's arm: the hand rides a free body held to the mocap target by a soft weld, so
     # the scripted reach and shake are compliant (an arm, not an infinitely strong fixture).

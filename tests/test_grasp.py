@@ -1,0 +1,90 @@
+"""The handshake grasp solved from its contacts (softhand.hands.grasp): what a biomechanist checks.
+
+Each assertion is a target of the grasp's definition (module docstring of softhand.hands.grasp):
+palms pressed together, each thumb over the back of the other hand's index metacarpal, fingertips
+wrapped past the other hand's mid-plane, no hand inside itself, bones apart, every partner joint
+inside its range by the grasp's margin. Measured values (default hands, 190 x 88 mm both) are in
+the comments; the tolerances are the definition's, not the measurement's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from softhand.hands import SceneConfig, partner_contact_pose, solve_grasp
+from softhand.hands.config import HandConfig, PartnerConfig
+from softhand.hands.grasp import GRASP_SETTINGS, grasp_metrics, set_grasp_state
+from softhand.hands.layout import hand_layout
+from softhand.hands.scene import scene_spec
+
+
+def _state(config: SceneConfig):
+    grasp = solve_grasp(config)
+    model = scene_spec(config).compile()
+    data = mujoco.MjData(model)
+    set_grasp_state(model, data, grasp)
+    return grasp, model, data
+
+
+def _bone_distance(model, data) -> float:
+    name = lambda g: model.geom(g).name  # noqa: E731
+    pro = [g for g in range(model.ngeom) if name(g).startswith("pro_bone")]
+    hum = [g for g in range(model.ngeom) if name(g).startswith("hum_bone")]
+    ft = np.zeros(6)
+    return min(mujoco.mj_geomDistance(model, data, a, b, 0.05, ft) for a in pro for b in hum)
+
+
+def _check(config: SceneConfig) -> dict:
+    grasp, model, data = _state(config)
+    pro, hum = hand_layout(config.prosthetic.hand), hand_layout(config.partner.hand)
+    m = grasp_metrics(model, data, pro, hum)
+    # palms pressed across their width: both palmar quarters within 1 mm of the partner's palm
+    # (measured -0.9 / -0.7 mm), none deeper than the grasp's allowance
+    for gap in m["palm_gap_mm"].values():
+        assert -1e3 * GRASP_SETTINGS.max_depth_m - 0.5 <= gap <= 1.0, m["palm_gap_mm"]
+    # each thumb pad over the back of the other hand (dorsal of its mid-plane by more than half
+    # the palm's thickness less the pad's press), on the radial half of the back (y > 0 is the
+    # index side of the mid-line; -0.3 mm measured for the long, narrow +2.5/-2.5 SD partner)
+    for key, other in (("partner_on_prosthetic", pro), ("prosthetic_on_partner", hum)):
+        _, y, z = m["thumb_tip_in_other_mm"][key]
+        assert z > 0.5e3 * other.thickness_m - 5.0, (key, m["thumb_tip_in_other_mm"])
+        assert y > -5.0, (key, m["thumb_tip_in_other_mm"])
+    # the fingers wrap round the ulnar border: the middle and ring tips past the mid-plane
+    for hand in ("partner", "prosthetic"):
+        for f in ("middle", "ring"):
+            assert m["fingertip_z_in_other_mm"][hand][f] > 0.0, m["fingertip_z_in_other_mm"]
+    # no hand inside itself (the test of the definition: 1 mm), bones apart, joints off their stops
+    assert max(m["self_penetration_mm"].values()) < 1.0, m["self_penetration_mm"]
+    assert _bone_distance(model, data) > GRASP_SETTINGS.bone_clearance_m - 1e-3
+    assert m["partner_limit_margin_deg"] >= GRASP_SETTINGS.limit_margin_deg - 1e-6
+    assert grasp.touching_phalanges, "no partner phalanx touches the other hand at the grasp"
+    return m
+
+
+def test_default_grasp_is_a_handshake():
+    _check(SceneConfig())
+
+
+def test_contact_pose_is_the_grasp_pose():
+    """The scene's contact pose is where the grasp puts the partner, not a clearance rule."""
+    grasp = solve_grasp(SceneConfig())
+    pos, quat = partner_contact_pose(SceneConfig())
+    np.testing.assert_array_equal(pos, grasp.partner_pos_m)
+    np.testing.assert_array_equal(quat, grasp.partner_quat)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dl, dw", [(-2.5, -2.5), (-2.5, 2.5), (2.5, -2.5), (2.5, 2.5)])
+def test_grasp_holds_at_the_corners_of_the_subjects_sizes(dl, dw):
+    """Partners at the +-2.5 SD corners of the paper's subjects (Table 1: 187.5 +- 11.37 mm long,
+    89.53 +- 6.80 mm wide) shake the default prosthetic hand with the same grasp definition."""
+    length = (187.5 + dl * 11.37) / 1000.0
+    width = (89.53 + dw * 6.80) / 1000.0
+    config = SceneConfig(partner=PartnerConfig(hand=HandConfig(hand_length_m=length,
+                                                               hand_width_m=width)))
+    m = _check(config)
+    assert math.isfinite(m["partner_limit_margin_deg"])
