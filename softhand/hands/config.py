@@ -173,17 +173,13 @@ class SceneConfig:
             handshake``) at 1.8x the speed of 1 ms.
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
         prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
-        crossing_angle_deg: angle between the two hands' long axes in the plane of the touching
-            palms, from antiparallel (0) to crossed at right angles (90), in degrees, shared equally
+        crossing_angle_deg: starting angle of the grasp solve (softhand.hands.grasp) between the
+            two hands' long axes in the plane of the touching palms, from antiparallel (0) to
+            crossed at right angles (90), in degrees, shared equally
             by the two hands. In a handshake each hand tilts ulnarly, its fingers pointing forward
             and down, so that each hand's fingers wrap around the other's ulnar border onto its
             back. Default 60 (30 deg of tilt per hand, each forearm 30 deg from horizontal): an
             assumption, no published measurement found.
-        partner_contact_offset_m: shift of the partner from the web-to-web pose in its hand
-            frame (m): default 12 mm off the palm, the smallest shift off the palm (1 mm steps) at
-            which the two hands' bones stay more than 2 mm apart at the target pose while their
-            soft layers press (the thenars meet first: the bulge of each thumb's metacarpal);
-            tests/test_hands.py checks it.
         partner_start_offset_m: partner mount start position relative to its contact pose (m, in
             the partner's hand frame: +x distal, +y radial, +z dorsal); the env moves the mocap
             from there to the contact pose (reach) and back. Default: 150 mm back along the
@@ -196,7 +192,6 @@ class SceneConfig:
     gravity_m_s2: float = 9.81
     prosthetic_wrist_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
     crossing_angle_deg: float = 60.0
-    partner_contact_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.012)
     partner_start_offset_m: tuple[float, float, float] = (-0.15, 0.0, 0.10)
 
     def __post_init__(self) -> None:
@@ -204,7 +199,7 @@ class SceneConfig:
                      why="s (skins calibrated at 0.0005-0.002 s)")
         _check("gravity_m_s2", self.gravity_m_s2, -1e-12, 100.0, "m/s^2")
         _check("crossing_angle_deg", self.crossing_angle_deg, -1e-12, 90.0 + 1e-12, "deg")
-        for name in ("prosthetic_wrist_pos_m", "partner_contact_offset_m", "partner_start_offset_m"):
+        for name in ("prosthetic_wrist_pos_m", "partner_start_offset_m"):
             value = getattr(self, name)
             if len(value) != 3:
                 raise ValueError(f"{name} = {value!r}: expected 3 coordinates in m")

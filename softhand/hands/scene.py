@@ -10,12 +10,9 @@ partner_quat()), so each forearm rises gently towards its elbow and each hand's 
 the other's palm. The env drives ``hum_base``: from its start
 pose (where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
 
-Contact pose: the palmar surfaces touch (along Y) and the two hands' web spaces (between thumb and
-index) meet, so that each hand's proximal phalanges lie across the other's palm and, with the
-crossing angle, its fingers wrap around the other's ulnar border onto the back of the hand when they
-flex, as in a full-enclosure handshake (paper: forces > 2 N on palm, back of palm, thumb and the
-proximal/middle phalanges). Both thumbs stay on the palmar side here; in real handshakes they cross
-over each other's index metacarpal, which this rigid-bone model only approximates.
+Contact pose: where the handshake's grasp, solved from its contacts, puts the partner
+(softhand.hands.grasp: palms pressed, web spaces together, each thumb over the back of the other
+hand's index metacarpal, the fingers wrapped round the other's ulnar border).
 """
 
 from __future__ import annotations

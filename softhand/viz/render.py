@@ -19,7 +19,10 @@ import numpy as np
 
 from softhand.io import atomic_open, check_writable_file
 
-__all__ = ["CameraView", "render_state"]
+__all__ = ["HAND_COLOURS", "CameraView", "render_state"]
+
+#: Colour of each hand's soft geoms in a picture (by name prefix): prosthetic skin, partner tissue.
+HAND_COLOURS = {"pro_skin_": (0.95, 0.62, 0.32, 0.85), "hum_tissue_": (0.25, 0.5, 0.9, 0.8)}
 
 
 @dataclass(frozen=True)
@@ -76,9 +79,19 @@ def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
     model.vis.global_.offheight = max(model.vis.global_.offheight, height)
     model.vis.scale.contactwidth = 0.05  # contact points as small discs (scaled by extent)
     model.vis.scale.contactheight = 0.01
-    with mujoco.Renderer(model, height, width) as renderer:
-        renderer.update_scene(data, camera=cam, scene_option=opt)
-        pixels = renderer.render()
+    # two hands, two colours: the prosthetic's skin warm, the partner's tissue blue
+    rgba = model.geom_rgba.copy()
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        for prefix, colour in HAND_COLOURS.items():
+            if name.startswith(prefix):
+                model.geom_rgba[g] = colour
+    try:
+        with mujoco.Renderer(model, height, width) as renderer:
+            renderer.update_scene(data, camera=cam, scene_option=opt)
+            pixels = renderer.render()
+    finally:
+        model.geom_rgba[:] = rgba
     import matplotlib
 
     matplotlib.use("Agg")
