@@ -66,6 +66,7 @@ from softhand.cli_inputs import (
     shipped_settings_differ,
     with_options,
 )
+from softhand.paper import paper
 from softhand.paths import FE_DIR, REPORTS_DIR, SENSORS_DIR, SKINS_DIR, is_shipped
 
 EXIT_CONVERGENCE, EXIT_INTERRUPTED = 3, 130
@@ -498,9 +499,12 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
 @click.option("--target", "target_N", type=Number(0.05, 20, unit="N"), default=None,
               help="Force the force controller holds on each digit, 0.05-20 N [default: 2.5].")
 @with_options(SENSOR_OPTIONS)
+@click.option("--partner-size", "partner_size", default=None, metavar="LENGTH_MM,WIDTH_MM",
+              help="The partner's hand, within +-2.5 SD of the paper's subjects "
+                   "[default: 190,88, the experimenter].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
-              placement_items, signal, target_N, as_json, **sensor_kw) -> None:
+              placement_items, signal, target_N, partner_size, as_json, **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
@@ -517,9 +521,11 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
             bad(f"--target {target_N:g}: only the force controller holds a target "
                 f"(--controller force); got --controller {controller}")
         settings["target_N"] = target_N
+    size = _partner_size(partner_size)
     try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
-                           timestep_s=timestep_s, sensor=spec, sensor_placement=placement)
+                           timestep_s=timestep_s, sensor=spec, sensor_placement=placement,
+                           partner_size=size)
     except ValueError as exc:
         msg = str(exc)
         if msg.startswith("sensor "):
@@ -577,6 +583,105 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                    f"the same compression {worst[1]['soft_contact_error_pct']:.1f} %")
     click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
+
+
+def _partner_size(text: str | None) -> tuple[float, float] | None:
+    """--partner-size LENGTH_MM,WIDTH_MM, checked against the paper's subjects' range."""
+    from softhand.envs.partner import check_partner_size
+
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        size = tuple(float(v) for v in parts)
+    except ValueError:
+        size = ()
+    if len(size) != 2:
+        bad(f"--partner-size {text!r}: expected LENGTH_MM,WIDTH_MM, e.g. 187.5,89.5")
+    try:
+        return check_partner_size(size)
+    except ValueError as exc:
+        bad(f"--partner-size: {exc}")
+
+
+@main.command("population")
+@click.option("--n", "n", type=click.IntRange(1, 10000), default=30, show_default=True,
+              help="Partners, 1-10000 (the paper had 30).")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
+              help="Seed of the population, 0 <= seed < 2^32.")
+@click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
+@click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
+              default="neutral", show_default=True, help="Controller of the prosthetic hand.")
+@click.option("--workers", "threads", type=click.IntRange(1, 64), default=None,
+              help="Worker processes [default: the CPUs available, at most 4].")
+@click.option("--out", "out_dir", default="population", show_default=True,
+              help="Folder for partners.json, results.json, results.csv and fig4.png.")
+def population(n, seed, design, controller, threads, out_dir) -> None:
+    """The paper's handshake experiment: n sampled partners shake the hand; per-region results
+    and a Fig. 4-style figure against the paper's set."""
+    from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.population import population_summary, run_partner, sample_partners
+    from softhand.io import atomic_write_text, interrupts_deferred
+    from softhand.parallel import available_cpus, run_tasks
+    from softhand.viz.population import population_figure
+
+    if design is not None and not design.strip():
+        bad("--design '': expected a skin name, e.g. pocket2-sil")
+    if threads is not None and threads > available_cpus():
+        bad(f"--workers {threads}: this machine lets softhand run on {available_cpus()} CPUs; "
+            f"allowed 1-{available_cpus()}")
+    out = checked_dir(out_dir, "--out")
+    if is_shipped(out):
+        bad(f"--out {str(out)!r} is inside the shipped calibration data; write elsewhere")
+    try:
+        HandshakeEnv(design=design)  # the skin and its calibration files, before any work
+    except ValueError as exc:
+        bad(str(exc))
+    partners = sample_partners(n, seed)
+    settings = {"design": design, "controller": controller}
+    done = []
+    with progress_bar(f"{n} partners", disable=False) as update:
+        batch = run_tasks(run_partner, [(p.index, (p, settings)) for p in partners],
+                          threads=threads,
+                          on_done=lambda key, ok: (done.append(key), update(len(done) / n)))
+    results = list(batch.results.values())
+    missing = {str(k): "interrupted" for k in batch.missing}
+    missing.update({str(k): str(e) for k, e in batch.errors.items()})
+    if results:
+        summary = population_summary(results)
+        with interrupts_deferred():
+            meta = {"n": n, "seed": seed, "hand": "prosthetic", "design": design or "pocket2-sil",
+                    "controller": controller, "finished": len(results), "missing": missing,
+                    "version": __version__}
+            atomic_write_text(out / "partners.json",
+                              json.dumps([p.to_dict() for p in partners], indent=1))
+            atomic_write_text(out / "results.json", json.dumps(
+                {"settings": meta, "summary": summary, "partners": results}, indent=1))
+            regions = list(results[0]["peak_N"])
+            rows = ["index,length_mm,width_mm,grip_N,duration_s," + ",".join(
+                f"{r}_peak_N" for r in regions) + ",grip_p95_error_pct,bone_on_bone_peak_N"]
+            for res in sorted(results, key=lambda r: r["partner"]["index"]):
+                p = res["partner"]
+                rows.append(",".join(f"{v:.4g}" for v in (
+                    p["index"], p["hand_length_mm"], p["hand_width_mm"], p["grip_N"],
+                    p["duration_s"], *(res["peak_N"][r] for r in regions),
+                    res["grip"]["p95_error_pct"],
+                    res["force_accounting"]["bone_on_bone_peak_N"])))
+            atomic_write_text(out / "results.csv", "\n".join(rows) + "\n")
+            title = (f"{len(results)} partners, prosthetic hand, {meta['design']}, "
+                     f"{controller} controller")
+            population_figure([r["peak_N"] for r in results],
+                              paper()["handshake"]["over_2N"], out / "fig4.png", title=title)
+        click.echo("| region | partners over 2 N % | median peak N | 10-90 % peak N | paper |\n"
+                   "|---|---|---|---|---|")
+        for region, v in summary.items():
+            click.echo(f"| {region} | {v['over_2N_pct']:.0f} | {v['median_peak_N']:.2f} | "
+                       f"{v['p10_peak_N']:.2f}-{v['p90_peak_N']:.2f} | "
+                       f"{'> 2 N' if v['paper_over_2N'] else ''} |")
+    _end_of_batch("partners", len(results), n, out, missing, batch.interrupted)
+    wall = sum(r["wall_s"] for r in results)
+    click.echo(f"wrote partners.json, results.json, results.csv and fig4.png to {out} "
+               f"({wall:.0f} s of handshakes)")
 
 
 @main.command("render")

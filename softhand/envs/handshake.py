@@ -16,7 +16,15 @@ import numpy as np
 from gymnasium import spaces
 
 from softhand.envs.models import skinned_scene_spec
-from softhand.envs.partner import GRIP_FORCE_N, PartnerScript, Timeline, partner_postures
+from softhand.envs.partner import (
+    GRIP_FORCE_N,
+    GRIP_PHALANGES,
+    PartnerScript,
+    Timeline,
+    check_partner_size,
+    check_reset_options,
+    partner_postures,
+)
 from softhand.envs.physics import MujocoPhysics
 from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
 from softhand.envs.skins import (
@@ -35,7 +43,7 @@ from softhand.hands import (
     regions,
     solve_grasp,
 )
-from softhand.hands.config import TIMESTEP_RANGE_S
+from softhand.hands.config import TIMESTEP_RANGE_S, HandConfig, PartnerConfig
 from softhand.hands.grasp import PROSTHETIC_MOTOR_JOINTS
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
@@ -58,11 +66,13 @@ class HandshakeEnv(gym.Env):
 
     The prosthetic hand (fixed, thumb up) wears a calibrated skin on each of the paper's 18 regions
     (Fig. 1: Thumb1-2, Index1-3, Middle1-3, Ring1-3, Little1-3, Palm1-2, Back1-2; 1 = proximal).
-    The partner reaches, grips to a human grip force, shakes at 4 Hz, lets go and leaves
-    (:mod:`softhand.envs.partner`, published timings). Its hand rides a compliant arm (a soft weld
-    to the scripted target) and meets the prosthetic hand palm to palm, web space to web space,
-    the hands crossed at 60 deg so that each hand's fingers wrap around the other's ulnar border
-    (:mod:`softhand.hands.scene`). The prosthetic hand's whole envelope is skin (the 18 regions and
+    The partner reaches with an open hand, slides its web space into the prosthetic's (whose
+    thumb is pre-rotated to the grasp), closes to its grasp posture and grips to a human grip
+    force, shakes at 4 Hz, lets go and leaves (:mod:`softhand.envs.partner`, published timings).
+    The grasp, both postures and the partner's pose, is solved from the handshake's contacts
+    (:mod:`softhand.hands.grasp`: palms together, web spaces together, each thumb over the back of
+    the other's index metacarpal, the fingers wrapped round the other's ulnar border). Its hand
+    rides a compliant arm (a soft weld to the scripted target); its size is ``partner_size``. The prosthetic hand's whole envelope is skin (the 18 regions and
     the non-sensing thenar; :mod:`softhand.hands.envelope`), the partner's is one layer of tissue;
     every contact between them is a calibrated soft contact (the skin in series with human tissue,
     fitted to 20 N, calibrated to 7 N: a contact above that raises a ``CalibratedRangeWarning``
@@ -124,13 +134,15 @@ class HandshakeEnv(gym.Env):
     controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
     error against 0.5 ms for each timestep).
 
-    ``info``: ``region_forces_N`` (dict region -> N, the true contact forces, always),
+    ``info``: ``region_forces_N`` (dict region -> N, the true contact forces, always: the
+    region's skin inside its sensor zone and its bone bottoming out there, flagged in
+    ``region_bone_N`` and counted in ``contacts_beyond_range``, since bone on bone is outside every
+    law's calibration),
     ``sensor_readings_N`` (dict region -> N on the sensor patch), ``sensor_load_estimate_N``
     (dict region -> N: the load a calibrated read-out infers from the reading by inverting the
     transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (the target of the
-    partner's summed digit force: its sampled grip per phalanx times the phalanges that touch at
-    the grasp), ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
+    partner's summed digit force: its sampled grip per phalanx times ``GRIP_PHALANGES``), ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
     effort), ``grasp_thumb_rotation_rad`` (the solved grasp's prosthetic thumb rotation).
 
     Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
@@ -176,6 +188,9 @@ class HandshakeEnv(gym.Env):
             (the rest ``interface``).
         observe: ``sensor`` (default), ``contact`` or ``both`` (see the observation space).
         sensor_dir: folder of ``transfer.json`` (default: the shipped ``calibration/sensors``).
+        partner_size: the partner's hand (length, width) in mm, each within +-2.5 SD of the
+            paper's 30 subjects (Table 1: 187.5 +- 11.37 mm, 89.53 +- 6.80 mm; any combination);
+            default the experimenter's 190 x 88 mm. The grasp is solved for this pair of hands.
 
     Raises:
         ValueError: at construction, a bad argument or calibration file, naming it and the
@@ -200,9 +215,15 @@ class HandshakeEnv(gym.Env):
                  calibration_dir: str | Path | None = None, randomize: bool = True,
                  sensor: SensorSpec | None = None,
                  sensor_placement: str | Mapping[str, str] | None = None,
-                 observe: str = "sensor", sensor_dir: str | Path | None = None) -> None:
+                 observe: str = "sensor", sensor_dir: str | Path | None = None,
+                 partner_size: tuple[float, float] | None = None) -> None:
         # every argument (and every calibration file used) is checked before any work is done
-        self.config = SceneConfig(timestep_s=timestep_s)  # checks the timestep
+        check_number("timestep_s", timestep_s, lo=TIMESTEP_RANGE_S[0], hi=TIMESTEP_RANGE_S[1],
+                     why="s (skins calibrated at 0.0005-0.002 s)")
+        self.partner_size_mm = check_partner_size(partner_size)
+        partner = PartnerConfig(hand=HandConfig(hand_length_m=self.partner_size_mm[0] / 1e3,
+                                                hand_width_m=self.partner_size_mm[1] / 1e3))
+        self.config = SceneConfig(timestep_s=timestep_s, partner=partner)
         timestep_s = self.config.timestep_s
         max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
@@ -258,7 +279,7 @@ class HandshakeEnv(gym.Env):
         #: the physics, behind the seam a batched backend would implement (envs.physics)
         self.physics = MujocoPhysics(m, self.frame_skip,
                                      [infos[r].sensor for r in self.region_names], feel,
-                                     "hum_base")
+                                     "hum_base", [infos[r].bone_sensors for r in self.region_names])
         self.model, self.data = m, self.physics.data
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
@@ -271,9 +292,14 @@ class HandshakeEnv(gym.Env):
         self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
         #: the handshake's grasp, solved from its contacts for these two hands (cached)
         self.grasp = solve_grasp(self.config)
-        self._grip_phalanges = max(1, len(self.grasp.touching_phalanges))
+        self._grip_phalanges = GRIP_PHALANGES
         self._grasp_thumb_rot = float(self.grasp.prosthetic_q[PROSTHETIC_MOTOR_JOINTS.index(
             "thumb_rot")])
+        # the prosthetic's thumb is pre-rotated to the grasp before the episode (a user pre-shapes
+        # the hand for a handshake, and the partner's hand slides into the web space under it)
+        rot_motor = m.actuator("pro_thumb_rot_motor").id
+        self._preset = ((self._thumb_rot_qpos, int(m.actuator_actadr[rot_motor]),
+                         self._grasp_thumb_rot),)
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         self._range = np.full((m.ngeom, m.ngeom), np.inf)
         self._pair_name = {}
@@ -294,12 +320,14 @@ class HandshakeEnv(gym.Env):
 
     # --- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Start an episode; ``seed`` is None or an integer >= 0, ``options`` None or ``{}``."""
+        """Start an episode; ``seed`` is None or an integer >= 0. ``options`` (None or a mapping)
+        may set the partner of this episode instead of the seed's draw: ``grip_N`` (its grip per
+        touching phalanx, N, in (0, 20]), ``duration_s`` (the handshake's duration, s, in
+        [2, 6]; phases scale with it) and ``shake_phase_rad`` (finite)."""
         if seed is not None and (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool)
                                  or seed < 0):
             raise ValueError(f"seed = {show(seed)}: expected None or an integer >= 0")
-        if options is not None and (not isinstance(options, Mapping) or options):
-            raise ValueError(f"options = {show(options)}: this env takes no options (None or {{}})")
+        options = check_reset_options(options)
         super().reset(seed=None if seed is None else int(seed))
         m = self.model
         rng = self.np_random
@@ -307,10 +335,14 @@ class HandshakeEnv(gym.Env):
         grip = GRIP_FORCE_N * self.squeeze * (float(rng.uniform(0.9, 1.1)) if self.randomize
                                               else 1.0)
         phase = float(rng.uniform(0, 2 * np.pi)) if self.randomize else 0.0
+        if "duration_s" in options:
+            factor = options["duration_s"] / self._timeline.total_s
+        grip = options.get("grip_N", grip)
+        phase = options.get("shake_phase_rad", phase)
         start, quat = partner_start_pose(self.config)
         contact, _ = partner_contact_pose(self.config)
         # the grip: GRIP_FORCE_N per phalanx (a data glove's mean per sensor, Melnyk et al. 2014)
-        # on each phalanx that touches the other hand at the grasp, summed
+        # on GRIP_PHALANGES phalanges, summed
         self._script = PartnerScript(self._timeline.scaled(factor), start, contact,
                                      grip_force_N=grip * self._grip_phalanges, shake_phase=phase,
                                      **partner_postures(self.grasp,
@@ -319,8 +351,9 @@ class HandshakeEnv(gym.Env):
         n_steps = int(np.ceil(self._script.timeline.total_s / m.opt.timestep)) + self.frame_skip
         self._mount = np.array([self._script.mount(k * m.opt.timestep) for k in range(n_steps)])
         self._step_index = 0
-        self.physics.reset(start, quat)
+        self.physics.reset(start, quat, self._preset)
         self._forces = np.zeros(len(self.region_names))
+        self._bone = np.zeros(len(self.region_names))
         # the sensors' noise: its own stream, drawn after the partner's (which it leaves as is)
         self.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
         self._readings = self.sensors.reading
@@ -363,7 +396,7 @@ class HandshakeEnv(gym.Env):
         end = k + self.frame_skip
         physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
         self._step_index = end
-        self._forces = physics.region_forces()
+        self._forces, self._bone = physics.region_forces()
         self._readings = self.sensors.step(self._forces)
         self._saturated = physics.saturated_sensors()
         self._check_range()
@@ -435,4 +468,5 @@ class HandshakeEnv(gym.Env):
                 "saturated_sensors": self._saturated,
                 "thumb_rotation_rad": float(self._qpos[self._thumb_rot_qpos]),
                 "grasp_thumb_rotation_rad": self._grasp_thumb_rot,
-                "contacts_beyond_range": self._beyond}
+                "contacts_beyond_range": self._beyond + int((self._bone > 0).sum()),
+                "region_bone_N": dict(zip(names, self._bone.tolist(), strict=True))}

@@ -28,6 +28,7 @@ shake moves both hands together and is left out, "a scene models only what it ne
 from __future__ import annotations
 
 from bisect import bisect_right
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -35,11 +36,17 @@ import numpy as np
 
 from softhand.hands.grasp import Grasp
 from softhand.hands.partner import PARTNER_JOINTS
+from softhand.paper import paper
 
-__all__ = ["CLOSE_S", "MAX_EFFORT_RAD", "PHASES", "PartnerScript", "Timeline", "partner_postures"]
+__all__ = ["CLOSE_S", "GRIP_FORCE_N", "GRIP_PHALANGES", "MAX_EFFORT_RAD", "PARTNER_SD_RANGE", "PHASES", "PartnerScript", "Timeline",
+           "check_partner_size", "check_reset_options", "partner_postures", "partner_size_range"]
 
 PHASES = ("reach", "grip", "shake", "release", "return", "done")
-GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N
+GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N (per data-glove sensor)
+#: Phalanges the grip force is summed over (its target is GRIP_FORCE_N x this). assumption: the
+#: partner phalanges that touch the other hand in the grasp of two 190 x 88 mm hands (the paper's
+#: experimenter's size); a person's grip does not grow with how many phalanges happen to touch.
+GRIP_PHALANGES = 8
 SHAKE_HZ = 4.0  # Melnyk et al. 2014
 SHAKE_AMPLITUDE_M = 0.005  # assumption, see the module docstring
 
@@ -186,3 +193,75 @@ def partner_postures(grasp: Grasp, upper_rad: np.ndarray) -> dict[str, np.ndarra
     effort_dir[rot] = 0.0
     q_max = np.asarray(upper_rad, float) - np.radians(grasp.settings.limit_margin_deg)
     return {"open_q": open_q, "grasp_q": grasp_q, "effort_dir": effort_dir, "q_max": q_max}
+
+
+#: How far from the paper's subjects' mean a partner's hand may be, in standard deviations (Table 1).
+PARTNER_SD_RANGE = 2.5
+
+
+def partner_size_range() -> dict[str, tuple[float, float]]:
+    """Allowed partner hand length and width (mm): the paper's 30 subjects (Table 1, read from
+    softhand.paper) +- PARTNER_SD_RANGE standard deviations."""
+    subjects = paper()["anthropometry"]
+    out = {}
+    for key in ("length", "width"):
+        mean, sd = subjects[f"subjects_hand_{key}_mm"]
+        out[key] = (mean - PARTNER_SD_RANGE * sd, mean + PARTNER_SD_RANGE * sd)
+    return out
+
+
+def check_partner_size(size) -> tuple[float, float]:
+    """``size`` as (length_mm, width_mm) within partner_size_range(); None: the experimenter's
+    190 x 88 mm (Table 1).
+
+    Raises:
+        ValueError: naming the value and the allowed range.
+    """
+    subjects = paper()["anthropometry"]
+    if size is None:
+        return (float(subjects["experimenter_hand_length_mm"]),
+                float(subjects["experimenter_hand_width_mm"]))
+    ranges = partner_size_range()
+    allowed = ", ".join(f"{k} {lo:.1f}-{hi:.1f} mm" for k, (lo, hi) in ranges.items())
+    try:
+        values = tuple(float(v) for v in size)
+    except (TypeError, ValueError):
+        values = ()
+    if len(values) != 2 or not all(np.isfinite(values)):
+        raise ValueError(f"partner_size = {size!r}: expected (length_mm, width_mm); allowed "
+                         f"{allowed} (+-{PARTNER_SD_RANGE:g} SD of the paper's subjects)")
+    for key, value in zip(("length", "width"), values, strict=True):
+        lo, hi = ranges[key]
+        if not lo - 1e-9 <= value <= hi + 1e-9:
+            raise ValueError(f"partner_size {key} = {value:g} mm: allowed {lo:.1f}-{hi:.1f} mm "
+                             f"(+-{PARTNER_SD_RANGE:g} SD of the paper's subjects, Table 1)")
+    return values
+
+
+#: reset() options that set the episode's partner, with their allowed closed ranges.
+RESET_OPTIONS = {"grip_N": (1e-6, 20.0), "duration_s": (2.0, 6.0),
+                 "shake_phase_rad": (-1e6, 1e6)}
+
+
+def check_reset_options(options) -> dict[str, float]:
+    """reset()'s ``options``: None or a mapping of RESET_OPTIONS keys to numbers in range.
+
+    Raises:
+        ValueError: an unknown key or a value out of range, naming it and the range.
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"options = {options!r}: expected None or a mapping with keys "
+                         f"{', '.join(RESET_OPTIONS)}")
+    out = {}
+    for key, value in options.items():
+        if key not in RESET_OPTIONS:
+            raise ValueError(f"options key {key!r} is unknown; allowed: {', '.join(RESET_OPTIONS)}")
+        lo, hi = RESET_OPTIONS[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+            raise ValueError(f"options[{key!r}] = {value!r}: expected a number in [{lo:g}, {hi:g}]")
+        if not (np.isfinite(value) and lo <= value <= hi):
+            raise ValueError(f"options[{key!r}] = {value!r}: allowed [{lo:g}, {hi:g}]")
+        out[key] = float(value)
+    return out

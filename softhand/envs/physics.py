@@ -5,10 +5,11 @@ controllers' interface, the reward and the observation; everything that touches 
 during an episode goes through :class:`MujocoPhysics`:
 
 ============================== =====================================================================
-``reset(mount_pos, quat)``     MuJoCo's reset, the partner's mount placed, ``mj_forward``
+``reset(mount_pos, quat, ...)``MuJoCo's reset, the partner's mount placed, motors pre-shaped
 ``advance(ctrl, mount_path)``  one action period: ``frame_skip`` steps, the mount following its
                                prescribed path (one row per step), sensors read on the last step
-``region_forces()``            normal force (N) of each region's contact sensor
+``region_forces()``            force (N) of each region: its skin's contact sensor and its bones
+                               bottoming out under it; and the bones' part
 ``saturated_sensors()``        region sensors that matched more contacts than they have slots
 ``partner_feel()``             net force (N) on each of the partner's phalanx tissues
 ``contacts_above(limits)``     the contacts whose normal force exceeds their pair's calibrated
@@ -42,10 +43,13 @@ class MujocoPhysics:
         region_sensors: the region contact sensors' names, in the env's region order.
         feel_sensors: the partner's net-force contact sensors the grip regulator reads.
         mocap_body: the partner's mount (a mocap body).
+        bone_sensors: per region, the contact sensors of its bones inside its zone (bone
+            bottoming out under its skin); their force is part of the region's force.
     """
 
     def __init__(self, model: mujoco.MjModel, frame_skip: int, region_sensors: list[str],
-                 feel_sensors: list[str], mocap_body: str) -> None:
+                 feel_sensors: list[str], mocap_body: str,
+                 bone_sensors: list[tuple[str, ...]] | None = None) -> None:
         self.model = model
         self.data = mujoco.MjData(model)
         self.frame_skip = int(frame_skip)
@@ -55,6 +59,13 @@ class MujocoPhysics:
         # every match
         self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
         self._found_idx = adr
+        bones = [(i, m.sensor_adr[m.sensor(s).id]) for i, names in enumerate(bone_sensors or [])
+                 for s in names]
+        self._bone_region = np.array([i for i, _ in bones], int)
+        self._bone_idx = (np.array([a for _, a in bones], int)[:, None]
+                          + np.arange(4 * SENSOR_SLOTS)[None, :] if bones
+                          else np.zeros((0, 4 * SENSOR_SLOTS), int))
+        self._n_regions = len(region_sensors)
         feel = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors])
         self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
         self._mocap = m.body(mocap_body).mocapid[0]
@@ -67,11 +78,18 @@ class MujocoPhysics:
     def time(self) -> float:
         return float(self.data.time)
 
-    def reset(self, mount_pos: np.ndarray, mount_quat: np.ndarray) -> None:
+    def reset(self, mount_pos: np.ndarray, mount_quat: np.ndarray,
+              preset: tuple[tuple[int, int, float], ...] = ()) -> None:
+        """MuJoCo's reset, the mount placed, and each ``(qpos address, act address, value)`` of
+        ``preset`` set: a joint and its integrated-velocity servo's setpoint (a motor pre-shaped
+        before the episode)."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         d.mocap_pos[self._mocap] = mount_pos
         d.mocap_quat[self._mocap] = mount_quat
+        for qadr, aadr, value in preset:
+            d.qpos[qadr] = value
+            d.act[aadr] = value
         mujoco.mj_forward(m, d)
 
     def advance(self, mount_path: np.ndarray) -> None:
@@ -91,8 +109,14 @@ class MujocoPhysics:
         finally:
             opt.disableflags = flags
 
-    def region_forces(self) -> np.ndarray:
-        return contact_sensor_force(self._sensordata[self._sensor_idx].reshape(-1, SENSOR_SLOTS, 4))
+    def region_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per region: the force on its sensed skin and bone together (N), and the bone's part."""
+        skin = contact_sensor_force(self._sensordata[self._sensor_idx].reshape(-1, SENSOR_SLOTS, 4))
+        bone = np.zeros(self._n_regions)
+        if self._bone_idx.size:
+            np.add.at(bone, self._bone_region, contact_sensor_force(
+                self._sensordata[self._bone_idx].reshape(-1, SENSOR_SLOTS, 4)))
+        return skin + bone, bone
 
     def saturated_sensors(self) -> int:
         return int((self._sensordata[self._found_idx] > SENSOR_SLOTS).sum())

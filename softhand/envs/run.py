@@ -57,6 +57,22 @@ class HandshakeRun:
     sensor_placements: dict[str, str] = field(default_factory=dict)
     sensor_spec: dict = field(default_factory=dict)
     controller: dict = field(default_factory=dict)
+    #: per frame: the partner's summed digit force and its target (N)
+    partner_grip_N: np.ndarray | None = None
+
+    def grip_tracking(self) -> dict[str, float]:
+        """How well the partner's summed digit force followed its target while it held the hand
+        (grip and shake, after its first 0.25 s): mean measured and target (N), and the 95th
+        percentile of the relative error (%)."""
+        g = self.partner_grip_N
+        holding = np.array([p in ("grip", "shake") for p in self.phase])
+        if g is None or not holding.any():
+            return {"measured_N": 0.0, "target_N": 0.0, "p95_error_pct": float("nan")}
+        start = self.time_s[holding][0] + 0.25
+        keep = holding & (self.time_s > start)
+        measured, target = g[keep, 0], g[keep, 1]
+        return {"measured_N": float(measured.mean()), "target_N": float(target.mean()),
+                "p95_error_pct": float(100 * np.percentile(np.abs(measured / target - 1), 95))}
 
     def force_accounting(self) -> dict[str, float]:
         """Where the normal force between the hands came from, over the recorded frames.
@@ -377,10 +393,13 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                   controller: str = "neutral", seed: int = 0, record_every: int | None = None,
                   env: HandshakeEnv | None = None, signal: str = "contact",
                   controller_settings: Mapping[str, float] | None = None,
+                  options: Mapping[str, float] | None = None,
                   **env_kwargs) -> HandshakeRun:
     """Run one episode; keep every ``record_every``-th physics step for the recording (default:
     the last step of every action, 100 Hz). ``signal`` and ``controller_settings`` go to
     :func:`~softhand.envs.controllers.make_controller`.
+
+    ``options`` go to the env's reset (the episode's partner: grip, duration, shake phase).
 
     ``env`` is an environment built already (then ``design``, ``skins`` and ``env_kwargs`` are
     not used): the CLI builds it first, so that every input is checked before the episode.
@@ -389,12 +408,12 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
         env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
     ctrl = make_controller(controller, signal, **dict(controller_settings or {}))
     record_every = record_every or env.frame_skip
-    obs, info = env.reset(seed=seed)
+    obs, info = env.reset(seed=seed, options=options)
     m, d = env.model, env.data
     zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc", "sf", "pf", "s")}
+                                                "acc", "sf", "pf", "s", "g")}
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
                   for g in env.region_geoms]
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
@@ -414,6 +433,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["f"].append([info["region_forces_N"][r] for r in env.region_names])
             frames["s"].append([info["sensor_readings_N"][r] for r in env.region_names])
             frames["ph"].append(info["phase"])
+            frames["g"].append((info["partner_grip_measured_N"], info["partner_grip_N"]))
             area, rigid, rows = areas(d)
             frames["c"].append(rows)
             frames["a"].append(area)
@@ -441,4 +461,5 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                         np.array(frames["s"]), dict(env.sensor_placements),
                         env.sensors.spec.to_dict(),
                         {"name": controller, "signal": signal if controller != "open-loop" else
-                         None, **dict(controller_settings or {})})
+                         None, **dict(controller_settings or {})},
+                        np.array(frames["g"]))

@@ -262,9 +262,10 @@ PARTNER = MappingProxyType(
         # MCP joint stiffness of the gripping partner's impedance (N m/rad). The order of the
         # finger's measured stiffness: fingertip stiffness of a few hundred N/m at light pinch
         # forces (Hajian AZ, Howe RD 1997, J Biomech Eng 119(1):109-114: 200-800 N/m for 2-20 N)
-        # times a ~0.09 m lever squared gives 1.6-6.5 N m/rad; 1.0 is the relaxed end of it
-        # (assumption: a handshake grip is light, 2-3 N per phalanx).
-        "finger_kp_nm_per_rad": 1.0,
+        # times a ~0.09 m lever squared gives 1.6-6.5 N m/rad; 2.0 is its low end (assumption: a
+        # handshake grip is light, 2-3 N per phalanx; at 1.0 a long, narrow partner ran out of
+        # effort before its grip, 18 N of 20 N).
+        "finger_kp_nm_per_rad": 2.0,
         # assumption: joint damping (N m s/rad) for the partner's finger joints; with the servo
         # torques above it bounds a free digit's flexion speed to ~20 rad/s, the order of fast
         # voluntary finger flexion.

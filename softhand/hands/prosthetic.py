@@ -125,6 +125,8 @@ class RegionInfo:
         geom: the skin geom (a capsule on a phalanx, a convex mesh on the palm).
         site: the sensor zone, a box over the skin's contact side.
         sensor: the contact sensor on the skin's contacts inside that site.
+        bone_sensors: contact sensors on the region body's bones inside that site (a
+            bone bottoming out on the other hand's bone under the region's skin).
     """
 
     region: str
@@ -132,6 +134,7 @@ class RegionInfo:
     geom: str
     site: str
     sensor: str
+    bone_sensors: tuple[str, ...] = ()
 
 
 def paper_regions() -> tuple[str, ...]:
@@ -262,6 +265,11 @@ def add_prosthetic_hand(
                           group=4, rgba=list(_SITE_RGBA))
             add_contact_sensor(spec, f"{prefix}touch_{skin}", f"{prefix}skin_{skin}",
                                site=f"{prefix}touch_{skin}")
+            # the region's bones bottoming out inside its zone: felt there too (normal forces,
+            # as the skin's sensor; bone on bone is outside every law's calibration)
+            for i, bone in enumerate(_bones_of(body, prefix)):
+                add_contact_sensor(spec, f"{prefix}touch_bone_{skin}_{i}", bone,
+                                   site=f"{prefix}touch_{skin}")
 
     # Couplings and motors. Ratios make all joints of a digit reach their upper limits together.
     grip_share = config.grip_force_n / const.PROSTHETIC["grip_digits"]
@@ -327,6 +335,19 @@ def add_prosthetic_hand(
     return skel.bodies["palm"]
 
 
+def _bone_sensors(model_or_spec: mujoco.MjModel | mujoco.MjSpec, stem: str) -> tuple[str, ...]:
+    """Names of the sensors ``{stem}0``, ``{stem}1``, ... present in the model or spec."""
+    out = []
+    while _has(model_or_spec, "sensor", f"{stem}{len(out)}"):
+        out.append(f"{stem}{len(out)}")
+    return tuple(out)
+
+
+def _bones_of(body: mujoco.MjsBody, prefix: str) -> list[str]:
+    """Names of the bone geoms carried by ``body`` (a phalanx: one; the palm: its metacarpals)."""
+    return [g.name for g in body.geoms if g.name.startswith(f"{prefix}bone_")]
+
+
 def build_prosthetic_hand(
     config: ProstheticConfig | None = None, prefix: str = "pro_"
 ) -> mujoco.MjSpec:
@@ -356,6 +377,7 @@ def regions(
             geom=f"{prefix}skin_{region}",
             site=f"{prefix}touch_{region}",
             sensor=f"{prefix}touch_{region}",
+            bone_sensors=_bone_sensors(model_or_spec, f"{prefix}touch_bone_{region}_"),
         )
         for kind, name in (
             ("body", info.body),
