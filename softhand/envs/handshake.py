@@ -72,7 +72,8 @@ class HandshakeEnv(gym.Env):
     The grasp, both postures and the partner's pose, is solved from the handshake's contacts
     (:mod:`softhand.hands.grasp`: palms together, web spaces together, each thumb over the back of
     the other's index metacarpal, the fingers wrapped round the other's ulnar border). Its hand
-    rides a compliant arm (a soft weld to the scripted target); its size is ``partner_size``. The prosthetic hand's whole envelope is skin (the 18 regions and
+    rides a compliant arm (a soft weld to the scripted target); its size is ``partner_size``.
+    The prosthetic hand's whole envelope is skin (the 18 regions and
     the non-sensing thenar; :mod:`softhand.hands.envelope`), the partner's is one layer of tissue;
     every contact between them is a calibrated soft contact (the skin in series with human tissue,
     fitted to 20 N, calibrated to 7 N: a contact above that raises a ``CalibratedRangeWarning``
@@ -142,7 +143,8 @@ class HandshakeEnv(gym.Env):
     (dict region -> N: the load a calibrated read-out infers from the reading by inverting the
     transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (the target of the
-    partner's summed digit force: its sampled grip per phalanx times ``GRIP_PHALANGES``), ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
+    partner's summed digit force: its sampled grip per phalanx times ``GRIP_PHALANGES``),
+    ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
     effort), ``grasp_thumb_rotation_rad`` (the solved grasp's prosthetic thumb rotation).
 
     Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every

@@ -38,7 +38,8 @@ from softhand.hands.grasp import Grasp
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.paper import paper
 
-__all__ = ["CLOSE_S", "GRIP_FORCE_N", "GRIP_PHALANGES", "MAX_EFFORT_RAD", "PARTNER_SD_RANGE", "PHASES", "PartnerScript", "Timeline",
+__all__ = ["CLOSE_S", "GRIP_FORCE_N", "GRIP_PHALANGES", "MAX_EFFORT_RAD", "PARTNER_SD_RANGE",
+           "PHASES", "PartnerScript", "Timeline",
            "check_partner_size", "check_reset_options", "partner_postures", "partner_size_range"]
 
 PHASES = ("reach", "grip", "shake", "release", "return", "done")
