@@ -698,7 +698,13 @@ def population(n, seed, design, controller, threads, out_dir) -> None:
 @click.option("--distance", type=Number(0.05, 5, unit="m"), default=0.3, show_default=True)
 @click.option("--size", nargs=2, type=click.IntRange(64, 4096), default=(960, 720),
               show_default=True, help="Width and height in pixels, 64-4096.")
-def render(out, design, controller, seed, at_s, azimuth, elevation, distance, size) -> None:
+@click.option("--partner-size", "partner_size", default=None, metavar="LENGTH_MM,WIDTH_MM",
+              help="The partner's hand, within +-2.5 SD of the paper's subjects.")
+@click.option("--sheet", is_flag=True,
+              help="A contact sheet instead: at grip and mid-shake, from the back of each hand "
+                   "and from below, regions coloured by force (ignores the camera options).")
+def render(out, design, controller, seed, at_s, azimuth, elevation, distance, size,
+           partner_size, sheet) -> None:
     """Run one handshake and render the scene at one moment to OUT (.png), offscreen.
 
     Needs an OpenGL context: MUJOCO_GL=egl (set here when unset) or osmesa.
@@ -706,16 +712,29 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import run_handshake
-    from softhand.viz.render import CameraView, render_state
+    from softhand.viz.render import CameraView, SheetFrame, render_sheet, render_state
 
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     path = checked_file(out, "OUT", ".png")
+    size_mm = _partner_size(partner_size)
     try:
-        env = HandshakeEnv(design=design)
+        env = HandshakeEnv(design=design, partner_size=size_mm)
     except ValueError as exc:
         bad(str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)
+    if sheet:
+        grip = [i for i, p in enumerate(run.phase) if p == "grip"]
+        shake = [i for i, p in enumerate(run.phase) if p == "shake"]
+        frames = []
+        for k, what in ((grip[-1], "end of the grip"), (shake[len(shake) // 2], "mid-shake")):
+            forces = {f"pro_skin_{r}": float(run.region_force_N[k, i])
+                      for i, r in enumerate(run.region_names)}
+            frames.append(SheetFrame(run.qpos[k], run.mocap_pos[k], run.mocap_quat[k],
+                                     f"{what}, t = {run.time_s[k]:.2f} s", forces))
+        render_sheet(run.model, frames, path)
+        click.echo(f"wrote {path} (end of the grip and mid-shake, 3 views each)")
+        return
     if at_s is None:
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]
         k = shake[len(shake) // 2]

@@ -134,10 +134,10 @@ def test_relaxation_on_the_hand_runs_a_handshake_and_is_the_written_mjcf():
     pull when the shake unloads it, where QLV's hereditary force goes negative; silicone 3.7 %);
     the region forces are lower than the memoryless soft contact's (the skin relaxes). Only the
     force along a pad's axis goes through the skin's law: 55 % of the force between the hands in
-    the old clearance-rule scene, 15 % in the grasp solved from the handshake's contacts (fingers
-    cross the pads and the thumbs press from the side); the rest meets the tissue's law alone,
-    which the accounting reports (README: a shortfall of the pads in a real handshake). The MJCF
-    of the spec loads in plain MuJoCo."""
+    the old clearance-rule scene, 35 % in the grasp solved from the handshake's contacts (fingers
+    cross the pads from the side); the rest meets the tissue's law alone, which the accounting
+    reports (README: a shortfall of the pads in a real handshake). The MJCF of the spec loads in
+    plain MuJoCo."""
     from softhand.envs.models import skinned_scene_spec
     from softhand.envs.run import run_handshake
     from softhand.envs.skins import parse_skins
@@ -145,12 +145,12 @@ def test_relaxation_on_the_hand_runs_a_handshake_and_is_the_written_mjcf():
     run = run_handshake(design="pocket2-pu", representation="soft-contact+relaxation", seed=0)
     acc = run.force_accounting()
     assert acc["bone_on_bone_peak_N"] == 0.0 and acc["no_law_Ns"] == 0.0
-    assert 10.0 < 100 * acc["skin_law_Ns"] / acc["total_Ns"] < 65.0, acc
+    assert 25.0 < 100 * acc["skin_law_Ns"] / acc["total_Ns"] < 65.0, acc
     assert acc["skin_law_Ns"] + acc["tissue_law_only_Ns"] == pytest.approx(acc["total_Ns"])
     relax = run.relaxation()
     assert {"Palm2", "Palm1", "Back1"} <= set(relax)  # the regions held above 1 N
-    # regions whose pad took the load along its axis (in the grasp the thumb's proximal phalanx
-    # holds 21 N from the side with its pad uncompressed: the tissue law alone, accounted above)
+    # regions whose pad took the load along its axis (in the grasp Little1 holds 8.6 N from the
+    # side with its pad uncompressed: the tissue law alone, accounted above)
     along = {k: v for k, v in relax.items() if v["max_compression_mm"] > 0.1}
     assert len(along) >= 3 and max(v["pad_error_pct"] for v in along.values()) < 30.0, relax
     soft = run_handshake(design="pocket2-pu", seed=0)

@@ -40,6 +40,10 @@ def _check_signal(signal: str) -> None:
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 _GRIPPING = ("grip", "shake")
+#: Phases in which the controllers open the digits. The thumb keeps its rotation: turning it back
+#: while the partner's hand still lies under it swept it through that hand (14-18 N on Thumb1-2
+#: and 1.4 N bone on bone in the release of the default handshake).
+_RELEASE = ("release", "return", "done")
 def _thumb_to_handshake(info: dict) -> float:
     """Thumb-rotation speed command (in [-1, 1]) towards the grasp's thumb rotation
     (``info["grasp_thumb_rotation_rad"]``, solved from the handshake's contacts, so that the thumb
@@ -76,9 +80,9 @@ class OpenLoopClose:
                 self._start = info["time_s"]
             a[:5] = self.speed if info["time_s"] - self._start < self.close_s else 0.0
             a[5] = _thumb_to_handshake(info)
-        elif info["phase"] in ("release", "return", "done"):
+        elif info["phase"] in _RELEASE:
             self._start = None
-            a[:] = -1.0
+            a[:5] = -1.0  # open; the thumb keeps its rotation (_RELEASE)
         return a
 
 
@@ -100,7 +104,7 @@ class ForceRegulating:
     def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
         a = np.zeros(6)
         if info["phase"] not in _GRIPPING:
-            a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
+            a[:5] = -1.0 if info["phase"] in _RELEASE else 0.0  # the thumb keeps its rotation
             return a
         forces = info[SIGNALS[self.signal]]
         for i, digit in enumerate(_DIGITS):
@@ -133,7 +137,7 @@ class Neutral:
         a = np.zeros(6)
         if info["phase"] not in _GRIPPING:
             self._held[:] = False
-            a[:] = -1.0 if info["phase"] in ("release", "return", "done") else 0.0
+            a[:5] = -1.0 if info["phase"] in _RELEASE else 0.0  # the thumb keeps its rotation
             return a
         forces = info[SIGNALS[self.signal]]
         for i, digit in enumerate(_DIGITS):
