@@ -469,6 +469,11 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
         click.echo(f"wrote {render_state(press.model, press.qpos, *empty, picture, view=view)}")
 
 
+_OPT_HAND = click.option(
+    "--hand", type=click.Choice(["prosthetic", "human"]), default="prosthetic", show_default=True,
+    help="The sensored hand: the prosthetic hand, or the paper's relaxed human hand (its protocol).")
+
+
 @main.command("handshake")
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
 @click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN[@REPRESENTATION]",
@@ -502,9 +507,11 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
 @click.option("--partner-size", "partner_size", default=None, metavar="LENGTH_MM,WIDTH_MM",
               help="The partner's hand, within +-2.5 SD of the paper's subjects "
                    "[default: 190,88, the experimenter].")
+@_OPT_HAND
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
-              placement_items, signal, target_N, partner_size, as_json, **sensor_kw) -> None:
+              placement_items, signal, target_N, partner_size, hand, as_json,
+              **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import OVER_N, run_handshake
@@ -522,10 +529,11 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                 f"(--controller force); got --controller {controller}")
         settings["target_N"] = target_N
     size = _partner_size(partner_size)
+    _check_hand(hand, controller, design=design, skins=skin_items, representation=representation)
     try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
                            timestep_s=timestep_s, sensor=spec, sensor_placement=placement,
-                           partner_size=size)
+                           partner_size=size, hand=hand)
     except ValueError as exc:
         msg = str(exc)
         if msg.startswith("sensor "):
@@ -543,6 +551,13 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     if as_json:
         click.echo(json.dumps(summary, indent=1))
         return
+    ep = summary["episode"]
+    what = ("the relaxed human hand (the paper's protocol)" if ep["hand"] == "human"
+            else f"the prosthetic hand, {controller} controller")
+    click.echo(f"handshake: {what}, seed {seed}, partner's hand {ep['partner_size_mm'][0]:g} x "
+               f"{ep['partner_size_mm'][1]:g} mm; partner's grip {summary['partner_grip']['measured_N']:.1f} N "
+               f"against {summary['partner_grip']['target_N']:.1f} N (95th percentile error "
+               f"{summary['partner_grip']['p95_error_pct']:.0f} %)\n")
     click.echo("| region | skin | peak N | mean N | peak area mm^2 | > 2 N | sensor | "
                "sensor peak N | sensor mean N |\n|---|---|---|---|---|---|---|---|---|")
     for region, v in summary["regions"].items():
@@ -585,6 +600,19 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                + (f"; recording: {record}" if record else ""))
 
 
+def _check_hand(hand: str, controller: str, **prosthetic_only) -> None:
+    """--hand human takes no prosthetic options: one line naming the first one given."""
+    if hand != "human":
+        return
+    if controller != "neutral":
+        bad(f"--controller {controller}: --hand human is the paper's relaxed experimenter, whose "
+            "neutral grip is its own (allowed with --hand human: neutral)")
+    for flag, value in prosthetic_only.items():
+        if value:
+            bad(f"--{flag} {value if isinstance(value, str) else ' '.join(value)}: --hand human "
+                "wears human tissue on every region; skins are for --hand prosthetic")
+
+
 def _partner_size(text: str | None) -> tuple[float, float] | None:
     """--partner-size LENGTH_MM,WIDTH_MM, checked against the paper's subjects' range."""
     from softhand.envs.partner import check_partner_size
@@ -616,7 +644,8 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
               help="Worker processes [default: the CPUs available, at most 4].")
 @click.option("--out", "out_dir", default="population", show_default=True,
               help="Folder for partners.json, results.json, results.csv and fig4.png.")
-def population(n, seed, design, controller, threads, out_dir) -> None:
+@_OPT_HAND
+def population(n, seed, design, controller, threads, out_dir, hand) -> None:
     """The paper's handshake experiment: n sampled partners shake the hand; per-region results
     and a Fig. 4-style figure against the paper's set."""
     from softhand.envs.handshake import HandshakeEnv
@@ -630,15 +659,16 @@ def population(n, seed, design, controller, threads, out_dir) -> None:
     if threads is not None and threads > available_cpus():
         bad(f"--workers {threads}: this machine lets softhand run on {available_cpus()} CPUs; "
             f"allowed 1-{available_cpus()}")
+    _check_hand(hand, controller, design=design)
     out = checked_dir(out_dir, "--out")
     if is_shipped(out):
         bad(f"--out {str(out)!r} is inside the shipped calibration data; write elsewhere")
     try:
-        HandshakeEnv(design=design)  # the skin and its calibration files, before any work
+        HandshakeEnv(design=design, hand=hand)  # the skin and its files, before any work
     except ValueError as exc:
         bad(str(exc))
     partners = sample_partners(n, seed)
-    settings = {"design": design, "controller": controller}
+    settings = {"design": design, "controller": controller, "hand": hand}
     done = []
     with progress_bar(f"{n} partners", disable=False) as update:
         batch = run_tasks(run_partner, [(p.index, (p, settings)) for p in partners],
@@ -650,7 +680,8 @@ def population(n, seed, design, controller, threads, out_dir) -> None:
     if results:
         summary = population_summary(results)
         with interrupts_deferred():
-            meta = {"n": n, "seed": seed, "hand": "prosthetic", "design": design or "pocket2-sil",
+            meta = {"n": n, "seed": seed, "hand": hand,
+                    "design": "human tissue" if hand == "human" else design or "pocket2-sil",
                     "controller": controller, "finished": len(results), "missing": missing,
                     "version": __version__}
             atomic_write_text(out / "partners.json",
@@ -668,7 +699,7 @@ def population(n, seed, design, controller, threads, out_dir) -> None:
                     res["grip"]["p95_error_pct"],
                     res["force_accounting"]["bone_on_bone_peak_N"])))
             atomic_write_text(out / "results.csv", "\n".join(rows) + "\n")
-            title = (f"{len(results)} partners, prosthetic hand, {meta['design']}, "
+            title = (f"{len(results)} partners, {hand} hand, {meta['design']}, "
                      f"{controller} controller")
             population_figure([r["peak_N"] for r in results],
                               paper()["handshake"]["over_2N"], out / "fig4.png", title=title)
@@ -703,8 +734,9 @@ def population(n, seed, design, controller, threads, out_dir) -> None:
 @click.option("--sheet", is_flag=True,
               help="A contact sheet instead: at grip and mid-shake, from the back of each hand "
                    "and from below, regions coloured by force (ignores the camera options).")
+@_OPT_HAND
 def render(out, design, controller, seed, at_s, azimuth, elevation, distance, size,
-           partner_size, sheet) -> None:
+           partner_size, sheet, hand) -> None:
     """Run one handshake and render the scene at one moment to OUT (.png), offscreen.
 
     Needs an OpenGL context: MUJOCO_GL=egl (set here when unset) or osmesa.
@@ -718,8 +750,9 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     path = checked_file(out, "OUT", ".png")
     size_mm = _partner_size(partner_size)
+    _check_hand(hand, controller, design=design)
     try:
-        env = HandshakeEnv(design=design, partner_size=size_mm)
+        env = HandshakeEnv(design=design, partner_size=size_mm, hand=hand)
     except ValueError as exc:
         bad(str(exc))
     run = run_handshake(controller=controller, seed=seed, env=env)

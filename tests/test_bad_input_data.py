@@ -409,8 +409,13 @@ def test_bad_actions_and_seeds_are_refused(env, action, needle):
     for seed in (-1, 1.5, "3", True):
         with pytest.raises(ValueError, match=f"seed = {seed!r}: expected None or an integer >= 0"):
             env.reset(seed=seed)
-    with pytest.raises(ValueError, match="this env takes no options"):
+    with pytest.raises(ValueError, match="options key 'fast' is unknown; allowed: grip_N, "
+                                         "duration_s, shake_phase_rad"):
         env.reset(seed=0, options={"fast": True})
+    for key, value, allowed in (("grip_N", 0.0, r"\[1e-06, 20\]"), ("duration_s", 9.0, r"\[2, 6\]"),
+                                ("shake_phase_rad", float("nan"), r"\[-1e\+06, 1e\+06\]")):
+        with pytest.raises(ValueError, match=rf"options\['{key}'\] = {value!r}: allowed {allowed}"):
+            env.reset(seed=0, options={key: value})
 
 
 def test_step_after_the_episode_ended_asks_for_reset(env):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 
 import gymnasium as gym
@@ -373,3 +374,41 @@ def test_bone_bottoming_out_under_a_region_is_in_its_reading():
     assert all(at["region_forces_N"][r] >= v for r, v in bone.items())
     assert at["contacts_beyond_range"] >= sum(v > 0 for v in bone.values())
     assert at["reward_terms"]["overload"] < 0.0
+
+
+def test_human_hand_runs_the_papers_protocol_whatever_the_action():
+    """hand="human": human tissue on every region (the human law in series with the partner's),
+    soft position servos instead of motors, surface sensors; the relaxed hand follows its own
+    neutral script, so two episodes with different actions are identical; everything through a
+    calibrated law, no bone on bone (measured 100 %, 0 N at seed 0)."""
+    from softhand.laws.references import HUMAN
+
+    env = HandshakeEnv(hand="human")
+    assert set(env.skins.values()) == {HUMAN} and set(env.sensor_placements.values()) == {"surface"}
+    m = env.model
+    drives = [m.actuator(a).id for a in ("pro_index_motor", "pro_thumb_rot_motor")]
+    assert all(m.actuator_biastype[a] == mujoco.mjtBias.mjBIAS_AFFINE for a in drives)
+    assert all(m.actuator_dyntype[a] == mujoco.mjtDyn.mjDYN_NONE for a in drives)  # no setpoint
+    forces = []
+    for action in (np.zeros(6), np.ones(6)):
+        _, info = env.reset(seed=0)
+        trace = []
+        while True:
+            _, _, term, trunc, info = env.step(action)
+            trace.append(list(info["region_forces_N"].values()))
+            if term or trunc:
+                break
+        forces.append(np.array(trace))
+    np.testing.assert_array_equal(forces[0], forces[1])
+    acc = run_handshake(env=env, seed=0).force_accounting()
+    assert acc["calibrated_share_pct"] >= 99.0 and acc["bone_on_bone_peak_N"] == 0.0, acc
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"hand": "robot"}, "hand = 'robot': allowed prosthetic, human"),
+    ({"hand": "human", "design": "pocket2-sil"}, "design = 'pocket2-sil'"),
+    ({"hand": "human", "representation": "rigid"}, "representation = 'rigid'"),
+])
+def test_bad_hand_arguments_name_the_value(kwargs, needle):
+    with pytest.raises(ValueError, match=re.escape(needle)):
+        HandshakeEnv(**kwargs)

@@ -49,6 +49,8 @@ def test_partner_size_range_is_checked(size):
     (["handshake", "--partner-size", "150,90"], "150"),
     (["handshake", "--partner-size", "190"], "LENGTH_MM,WIDTH_MM"),
     (["population", "--workers", "999"], "999"),
+    (["population", "--hand", "robot"], "robot"),
+    (["population", "--hand", "human", "--controller", "force"], "--controller force"),
 ])
 def test_bad_population_input_is_one_line_naming_the_value(args, needle, tmp_path):
     res = CliRunner().invoke(main, [*args, *(["--out", str(tmp_path / "p")]

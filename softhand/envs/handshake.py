@@ -20,6 +20,7 @@ from softhand.envs.partner import (
     GRIP_FORCE_N,
     GRIP_PHALANGES,
     PartnerScript,
+    RelaxedHand,
     Timeline,
     check_partner_size,
     check_reset_options,
@@ -43,15 +44,24 @@ from softhand.hands import (
     regions,
     solve_grasp,
 )
-from softhand.hands.config import TIMESTEP_RANGE_S, HandConfig, PartnerConfig
+from softhand.hands.config import TIMESTEP_RANGE_S, HandConfig, PartnerConfig, ProstheticConfig
 from softhand.hands.grasp import PROSTHETIC_MOTOR_JOINTS
 from softhand.hands.partner import PARTNER_JOINTS
+from softhand.hands.prosthetic import paper_regions
+from softhand.laws.references import HUMAN
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
 from softhand.skin.files import SKINS_DIR
 from softhand.validate import check_number, show
 
-__all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "MAX_ACTION_PERIOD_S",
-           "TIMESTEP_RANGE_S", "HandshakeEnv"]
+__all__ = [
+    "ACTION_PERIOD_S",
+    "DEFAULT_REWARD_WEIGHTS",
+    "DEFAULT_TIMESTEP_S",
+    "HANDS",
+    "MAX_ACTION_PERIOD_S",
+    "TIMESTEP_RANGE_S",
+    "HandshakeEnv",
+]
 
 DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
 CONTACT_N = 0.05  # a region counts as touched above this force
@@ -59,6 +69,10 @@ _GRIPPING = ("grip", "shake")
 ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
 MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
 DEFAULT_TIMESTEP_S = SceneConfig.timestep_s
+#: The sensored hand: the prosthetic hand (default, its 6 motors driven by the action), or the
+#: paper's experimenter's relaxed human hand (human tissue on every region, soft joint
+#: impedance, a neutral grip that waits for the partner; the action is not used).
+HANDS = ("prosthetic", "human")
 
 
 class HandshakeEnv(gym.Env):
@@ -190,6 +204,13 @@ class HandshakeEnv(gym.Env):
             (the rest ``interface``).
         observe: ``sensor`` (default), ``contact`` or ``both`` (see the observation space).
         sensor_dir: folder of ``transfer.json`` (default: the shipped ``calibration/sensors``).
+        hand: ``prosthetic`` (default) or ``human``: the paper's protocol, the sensored hand as
+            the experimenter's relaxed human hand (HANDS): human tissue on every region against
+            the partner's (both the human law), soft joint impedance
+            (constants.RELAXED_HUMAN) holding the grasp posture it closes to after the reach,
+            surface sensors (the paper's FingerTPS pads); ``design``, ``skins`` and
+            ``representation`` are the prosthetic's and refused here; actions are checked but
+            not used.
         partner_size: the partner's hand (length, width) in mm, each within +-2.5 SD of the
             paper's 30 subjects (Table 1: 187.5 +- 11.37 mm, 89.53 +- 6.80 mm; any combination);
             default the experimenter's 190 x 88 mm. The grasp is solved for this pair of hands.
@@ -218,14 +239,19 @@ class HandshakeEnv(gym.Env):
                  sensor: SensorSpec | None = None,
                  sensor_placement: str | Mapping[str, str] | None = None,
                  observe: str = "sensor", sensor_dir: str | Path | None = None,
-                 partner_size: tuple[float, float] | None = None) -> None:
+                 partner_size: tuple[float, float] | None = None,
+                 hand: str = "prosthetic") -> None:
         # every argument (and every calibration file used) is checked before any work is done
         check_number("timestep_s", timestep_s, lo=TIMESTEP_RANGE_S[0], hi=TIMESTEP_RANGE_S[1],
                      why="s (skins calibrated at 0.0005-0.002 s)")
         self.partner_size_mm = check_partner_size(partner_size)
         partner = PartnerConfig(hand=HandConfig(hand_length_m=self.partner_size_mm[0] / 1e3,
                                                 hand_width_m=self.partner_size_mm[1] / 1e3))
-        self.config = SceneConfig(timestep_s=timestep_s, partner=partner)
+        if hand not in HANDS:
+            raise ValueError(f"hand = {show(hand)}: allowed {', '.join(HANDS)}")
+        self.hand = hand
+        prosthetic = ProstheticConfig(actuation="relaxed-human" if hand == "human" else "motors")
+        self.config = SceneConfig(timestep_s=timestep_s, partner=partner, prosthetic=prosthetic)
         timestep_s = self.config.timestep_s
         max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
@@ -245,7 +271,17 @@ class HandshakeEnv(gym.Env):
         if not isinstance(randomize, (bool, np.bool_)):
             raise ValueError(f"randomize = {show(randomize)}: expected True or False")
         self.weights = weights
-        self.skins, self.representations = parse_skins(design, skins, representation)
+        if hand == "human":
+            if design not in (None, HUMAN) or skins or representation not in (None,
+                                                                             "soft-contact"):
+                raise ValueError(
+                    f"hand = 'human' wears human tissue ({HUMAN}, soft contact) on every region; "
+                    f"design = {show(design)}, skins = {show(skins)} and representation = "
+                    f"{show(representation)} are for hand = 'prosthetic'")
+            self.skins = dict.fromkeys(paper_regions(), HUMAN)
+            self.representations = dict.fromkeys(paper_regions(), "soft-contact")
+        else:
+            self.skins, self.representations = parse_skins(design, skins, representation)
         self.frame_skip = int(frame_skip)
         if observe not in OBSERVE:
             raise ValueError(f"observe = {show(observe)}: allowed {', '.join(OBSERVE)}")
@@ -354,6 +390,8 @@ class HandshakeEnv(gym.Env):
         self._mount = np.array([self._script.mount(k * m.opt.timestep) for k in range(n_steps)])
         self._step_index = 0
         self.physics.reset(start, quat, self._preset)
+        self._relaxed = RelaxedHand(self._script.timeline, self.grasp.prosthetic_q,
+                                    PROSTHETIC_MOTOR_JOINTS.index("thumb_rot"))
         self._forces = np.zeros(len(self.region_names))
         self._bone = np.zeros(len(self.region_names))
         # the sensors' noise: its own stream, drawn after the partner's (which it leaves as is)
@@ -388,7 +426,10 @@ class HandshakeEnv(gym.Env):
                                "s): call reset() before step()")
         physics, script = self.physics, self._script
         ctrl, opt = self._ctrl, self.model.opt
-        ctrl[self._pro_act] = a * self._max_speed
+        if self.hand == "human":  # the relaxed hand follows its own script; the action is unused
+            ctrl[self._pro_act] = self._relaxed.targets(physics.time)
+        else:
+            ctrl[self._pro_act] = a * self._max_speed
         # the partner's grip acts once per action step (100 Hz by default), the arm every step
         t = physics.time
         grip = float(physics.partner_feel().sum())  # what the partner's digits press

@@ -39,7 +39,7 @@ from softhand.hands.partner import PARTNER_JOINTS
 from softhand.paper import paper
 
 __all__ = ["CLOSE_S", "GRIP_FORCE_N", "GRIP_PHALANGES", "MAX_EFFORT_RAD", "PARTNER_SD_RANGE",
-           "PHASES", "PartnerScript", "Timeline",
+           "PHASES", "PartnerScript", "RelaxedHand", "Timeline",
            "check_partner_size", "check_reset_options", "partner_postures", "partner_size_range"]
 
 PHASES = ("reach", "grip", "shake", "release", "return", "done")
@@ -266,3 +266,33 @@ def check_reset_options(options) -> dict[str, float]:
             raise ValueError(f"options[{key!r}] = {value!r}: allowed [{lo:g}, {hi:g}]")
         out[key] = float(value)
     return out
+
+
+class RelaxedHand:
+    """The paper's experimenter's hand in a neutral handshake ("kept his grasping force at a
+    minimum and waited for the handshake partner to initiate the contact"): targets of the 6 soft
+    drives of a ``relaxed-human`` hand. Open on the reach with the thumb rotated to the grasp,
+    closing to the grasp posture (``grasp_q``, solved from the handshake's contacts) in CLOSE_S
+    once the partner arrives, holding it through the shake, opening in 0.2 s from the release; the
+    thumb keeps its rotation.
+
+    Args:
+        timeline: the episode's phases.
+        grasp_q: the drives' grasp angles (rad), in the order of the hand's actuators.
+        rotation: index of the thumb's rotation drive in ``grasp_q``.
+    """
+
+    def __init__(self, timeline: Timeline, grasp_q: np.ndarray, rotation: int) -> None:
+        self.timeline = timeline
+        self.grasp = np.asarray(grasp_q, float)
+        self.open = np.zeros_like(self.grasp)
+        self.open[rotation] = self.grasp[rotation]
+
+    def targets(self, t: float) -> np.ndarray:
+        tl = self.timeline
+        phase = tl.phase(t)
+        if phase == "reach":
+            return self.open.copy()
+        if phase in ("grip", "shake"):
+            return self.open + _min_jerk((t - tl.ends[0]) / CLOSE_S) * (self.grasp - self.open)
+        return self.grasp + _min_jerk((t - tl.ends[2]) / 0.2) * (self.open - self.grasp)

@@ -89,7 +89,8 @@ class MujocoPhysics:
         d.mocap_quat[self._mocap] = mount_quat
         for qadr, aadr, value in preset:
             d.qpos[qadr] = value
-            d.act[aadr] = value
+            if aadr >= 0:  # a servo with a state (integrated velocity); a position servo has none
+                d.act[aadr] = value
         mujoco.mj_forward(m, d)
 
     def advance(self, mount_path: np.ndarray) -> None:

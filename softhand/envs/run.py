@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from softhand import __version__
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.skins import calibrated_max_force, skin_of_pair
@@ -59,6 +60,8 @@ class HandshakeRun:
     controller: dict = field(default_factory=dict)
     #: per frame: the partner's summed digit force and its target (N)
     partner_grip_N: np.ndarray | None = None
+    #: the episode: sensored hand, partner's hand size (mm), seed, softhand version
+    episode: dict = field(default_factory=dict)
 
     def grip_tracking(self) -> dict[str, float]:
         """How well the partner's summed digit force followed its target while it held the hand
@@ -219,7 +222,8 @@ class HandshakeRun:
                 "rigid_contact_peak_N": float(rigid.max()),
                 "force_accounting": self.force_accounting(),
                 "kinematics": self.kinematics(),
-                "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s}
+                "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s,
+                "episode": dict(self.episode), "partner_grip": self.grip_tracking()}
         if self.representations:
             out["representations"] = dict(self.representations)
         if self.sensor_spec:
@@ -462,4 +466,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                         env.sensors.spec.to_dict(),
                         {"name": controller, "signal": signal if controller != "open-loop" else
                          None, **dict(controller_settings or {})},
-                        np.array(frames["g"]))
+                        np.array(frames["g"]),
+                        {"hand": env.hand, "partner_size_mm": list(env.partner_size_mm),
+                         "seed": seed, "options": dict(options or {}),
+                         "softhand_version": __version__})

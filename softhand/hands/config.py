@@ -15,7 +15,8 @@ from softhand.hands import constants as const
 from softhand.paper import paper
 from softhand.validate import check_number
 
-__all__ = ["TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "ProstheticConfig", "SceneConfig"]
+__all__ = ["ACTUATIONS", "TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "ProstheticConfig",
+           "SceneConfig"]
 
 #: Allowed simulation timestep of the handshake scene, closed interval (s). The skins were
 #: calibrated and are tested at 0.5-2 ms (``softhand.skin.rig.CHECKED_TIMESTEPS_S``; the env tests
@@ -25,6 +26,8 @@ __all__ = ["TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "ProstheticConfig"
 #: 0.1 ms: five times finer than the reference step; an episode precomputes one mount target per
 #: physics step (36,300 at 0.1 ms, under 1 MB), so a smaller step would grow without bound.
 TIMESTEP_RANGE_S = (1e-4, 5e-3)
+#: How the sensored hand's 6 drives act (ProstheticConfig.actuation).
+ACTUATIONS = ("motors", "relaxed-human")
 
 
 def _paper_mm(key: str) -> float:
@@ -101,6 +104,9 @@ class ProstheticConfig:
         grip_force_n: maximum power-grip force (N); sets the motors' stall torques ([Belter13]).
         stall_deflection_rad: servo deflection at stall torque (rad); sets the servo stiffness.
         armature_kg_m2: reflected rotor inertia on each motor-driven joint (kg m^2).
+        actuation: ``motors`` (the prosthetic hand's 6 non-back-drivable motors) or
+            ``relaxed-human`` (the same hand as the paper's sensored human hand: the 6 drives are
+            soft position servos, constants.RELAXED_HUMAN, and hold a posture the env sets).
     """
 
     hand: HandConfig = field(default_factory=HandConfig)
@@ -109,8 +115,11 @@ class ProstheticConfig:
     grip_force_n: float = const.PROSTHETIC["grip_force_n"]
     stall_deflection_rad: float = const.PROSTHETIC["stall_deflection_rad"]
     armature_kg_m2: float = const.PROSTHETIC["armature_kg_m2"]
+    actuation: str = "motors"
 
     def __post_init__(self) -> None:
+        if self.actuation not in ACTUATIONS:
+            raise ValueError(f"actuation = {self.actuation!r}: allowed {', '.join(ACTUATIONS)}")
         _check("closing_time_s", self.closing_time_s, 0.05, 10.0, "s")
         _check("thumb_rotation_time_s", self.thumb_rotation_time_s, 0.05, 10.0, "s")
         _check("grip_force_n", self.grip_force_n, 0.0, 1000.0, "N")

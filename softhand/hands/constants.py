@@ -66,6 +66,7 @@ __all__ = [
     "PHALANX_TAPER",
     "PROSTHETIC",
     "PROSTHETIC_RANGE_DEG",
+    "RELAXED_HUMAN",
     "SEGMENT_LENGTH_RATIO",
     "THENAR_RADIUS_OVER_THUMB",
     "THUMB_BREADTH_OVER_INDEX",
@@ -246,6 +247,20 @@ PROSTHETIC = MappingProxyType(
 # --------------------------------------------------------------------------------------------------
 # Partner (human) hand actuation for a scripted grip
 # --------------------------------------------------------------------------------------------------
+
+#: The sensored human hand of the paper's protocol (SceneConfig.sensored_hand = "human"): the
+#: experimenter's relaxed "neutral handshake" (paper, Handshake experiments: "kept his grasping
+#: force at a minimum and waited for the handshake partner"). Its digits follow the grasp posture
+#: through position servos of this stiffness on its 6 drives (each finger's MCP, the thumb's MCP
+#: and rotation; the coupled joints follow, as on the prosthetic hand).
+RELAXED_HUMAN = MappingProxyType(
+    {
+        # passive index MCP stiffness of healthy hands is 0.03-0.05 N m/rad (4 subjects, PMC7775510
+        # Table 2); assumption: 0.1 N m/rad, twice that, for the minimal tone that holds the
+        # grasp posture while the partner shakes (a relaxed hand, not a limp one).
+        "mcp_kp_nm_per_rad": 0.1,
+    }
+)
 
 PARTNER = MappingProxyType(
     {

@@ -189,8 +189,15 @@ def _motor(
     torque: float,
     config: ProstheticConfig,
 ) -> None:
-    """Integrated-velocity servo: ctrl in rad/s, setpoint clamped to [lo, hi], force to +-torque."""
+    """Integrated-velocity servo: ctrl in rad/s, setpoint clamped to [lo, hi], force to +-torque.
+    A relaxed human hand (ProstheticConfig.actuation) gets a position servo instead: ctrl is the
+    joint's target in [lo, hi], of the relaxed stiffness constants.RELAXED_HUMAN."""
     act = spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    if config.actuation == "relaxed-human":
+        act.set_to_position(kp=const.RELAXED_HUMAN["mcp_kp_nm_per_rad"], dampratio=1.0)
+        act.ctrllimited, act.ctrlrange = _TRUE, [lo, hi]
+        act.forcelimited, act.forcerange = _TRUE, [-torque, torque]
+        return
     act.set_to_intvelocity(kp=torque / config.stall_deflection_rad, dampratio=1.0)
     speed = (hi - lo) / time_s
     act.ctrllimited, act.ctrlrange = _TRUE, [-speed, speed]

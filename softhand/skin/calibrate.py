@@ -400,7 +400,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         "law_fit_s": law_s,
     }
     pair = None  # the pair law is a soft contact: fitted with (and started from) the skin's own
-    if design != HUMAN and "soft-contact" in results:
+    if "soft-contact" in results:  # the human tissue too: the sensored human hand against the partner
         t0 = time.perf_counter()
         tissue = reference_law(HUMAN)
         initial = own["soft-contact"]  # the skin's own soft contact, fitted above
