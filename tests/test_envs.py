@@ -221,7 +221,7 @@ def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_
     obs, info = env.reset(seed=0)
     pro, hum = hand_layout(env.config.prosthetic.hand), hand_layout(env.config.partner.hand)
     errors, worst = [], 0.0
-    grip_start = env._script.timeline.ends[0] + 0.25
+    grip_start = env.scenario.script.timeline.ends[0] + 0.25
     while True:
         obs, _, term, trunc, info = env.step(controller(obs, info))
         if info["phase"] in ("grip", "shake") and info["time_s"] > grip_start:
@@ -412,3 +412,34 @@ def test_human_hand_runs_the_papers_protocol_whatever_the_action():
 def test_bad_hand_arguments_name_the_value(kwargs, needle):
     with pytest.raises(ValueError, match=re.escape(needle)):
         HandshakeEnv(**kwargs)
+
+
+def test_a_new_touch_is_a_scenario_not_a_copy_of_the_env():
+    """The scenario seam: "a hand held still" (the handshake's reach and grip, the mount held at
+    the grasp instead of shaking) is a 6-line Scenario subclass run by the generic two-hand touch
+    env; the handshake's shake moves the mount +-5 mm, the held hand not at all."""
+    from softhand.envs.scenarios import HandshakeScenario
+    from softhand.envs.touch import TwoHandTouchEnv
+
+    class HeldStill(HandshakeScenario):
+        name = "held-still"
+
+        def mount(self, t):
+            pos = self.script.mount(t)
+            return self.script.contact.copy() if self.phase(t) == "shake" else pos
+
+    swings = {}
+    for scenario in (HandshakeScenario(), HeldStill()):
+        env = TwoHandTouchEnv(scenario=scenario)
+        _, info = env.reset(seed=0)
+        z, touched = [], 0.0
+        while True:
+            _, _, term, trunc, info = env.step(np.zeros(6))
+            if info["phase"] == "shake":
+                z.append(env.data.mocap_pos[0, 2])
+                touched = max(touched, sum(info["region_forces_N"].values()))
+            if term or trunc:
+                break
+        swings[scenario.name] = (max(z) - min(z), touched)
+    assert swings["handshake"][0] > 5e-3 and swings["held-still"][0] == 0.0, swings
+    assert swings["held-still"][1] > 1.0, swings  # the hands hold each other in both

@@ -1,5 +1,11 @@
 """The handshake environment (stage 4): Gymnasium env, partner script, skins on the hand, controllers.
 
+- touch: the generic two-hand touch env (hands, skins, sensors, physics, action, observation);
+- scenario: the seam a social touch implements; scenarios/: one module per touch (handshake);
+- handshake: ``HandshakeEnv``, the touch env with the handshake scenario;
+- partner: the partner's script and population bounds; population: partners like the paper's 30;
+- physics, sensing, skins, models, controllers, run: the pieces the env and its runs use.
+
 Importing this package registers ``softhand/Handshake-v0``::
 
     import gymnasium as gym

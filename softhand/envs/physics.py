@@ -1,8 +1,8 @@
 """The physics of the handshake env, behind one seam: what a batched backend would implement.
 
-:class:`HandshakeEnv <softhand.envs.handshake.HandshakeEnv>` keeps the partner's script, the
-controllers' interface, the reward and the observation; everything that touches MuJoCo's state
-during an episode goes through :class:`MujocoPhysics`:
+:class:`TwoHandTouchEnv <softhand.envs.touch.TwoHandTouchEnv>` and its scenario keep the
+partner's script, the controllers' interface, the reward and the observation; everything that
+touches MuJoCo's state during an episode goes through :class:`MujocoPhysics`:
 
 ============================== =====================================================================
 ``reset(mount_pos, quat, ...)``MuJoCo's reset, the partner's mount placed, motors pre-shaped
