@@ -567,6 +567,15 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         click.echo(f"| {region} | {skin} | {v['peak_N']:.2f} | {v['mean_N']:.2f} | "
                    f"{v['peak_area_mm2']:.0f} | {mark} | {v['sensor_placement']} | "
                    f"{v['sensor_peak']:.2f} | {v['sensor_mean']:.2f} |")
+    chk = summary["grasp_checks"]
+    thumbs = chk["thumb_tip_in_other_mm"]
+    click.echo(f"\ngrasp at mid-shake (t = {chk['t_mid_shake_s']:.2f} s): palm to palm (thenars "
+               f"included) {chk['palm_to_palm_share_pct']:.0f} % of the force between the hands; "
+               f"thumb pads {thumbs['partner_on_prosthetic'][2]:.0f} mm (partner's) and "
+               f"{thumbs['prosthetic_on_partner'][2]:.0f} mm (prosthetic's) dorsal of the other "
+               f"hand's mid-plane; deepest self-penetration "
+               f"{max(chk['self_penetration_mm'].values()):.1f} mm; the partner's joints "
+               f"{chk['partner_limit_margin_deg']:.1f} deg or more inside their ranges")
     cmp = summary["paper_over_2N"]
     click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
     click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "

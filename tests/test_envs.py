@@ -216,6 +216,14 @@ def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_
     assert acc["bone_on_bone_Ns"] == 0.0 and acc["bone_on_bone_peak_N"] == 0.0, acc
     kin = run.kinematics()
     assert kin["partner_beyond_range_deg"]["max"] < 3.0, kin  # soft limits, 3 deg
+    checks = run.grasp_checks()
+    # the palms (thenars included) carry part of the force at mid-shake (measured 15 %); each
+    # thumb pad lies over the other hand's back (its dorsal skin is 15 mm from its mid-plane:
+    # measured 22 and 34 mm); no partner joint reaches a stop while it holds (measured 4.9 deg)
+    assert checks["palm_to_palm_share_pct"] > 5.0, checks
+    assert all(v[2] > 15.0 for v in checks["thumb_tip_in_other_mm"].values()), checks
+    assert checks["partner_limit_margin_deg"] > 2.0, checks
+    assert max(checks["self_penetration_mm"].values()) < 1.0, checks
     env = HandshakeEnv()
     controller = make_controller("neutral")
     obs, info = env.reset(seed=0)

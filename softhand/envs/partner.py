@@ -180,14 +180,21 @@ class PartnerScript:
         return held + s * (self.open - held)
 
 
-def partner_postures(grasp: Grasp, upper_rad: np.ndarray) -> dict[str, np.ndarray]:
+#: How far inside its range the open hand holds a joint whose range starts at 0 (PIP, thumb MCP):
+#: a relaxed open hand is slightly flexed, not pressed on its extension stops (deg; assumption).
+OPEN_MARGIN_DEG = 5.0
+
+
+def partner_postures(grasp: Grasp, lower_rad: np.ndarray,
+                     upper_rad: np.ndarray) -> dict[str, np.ndarray]:
     """PartnerScript's postures for a grasp: ``grasp_q`` the solved posture; ``open_q`` the
-    reaching hand, fingers straight and the thumb extended at its grasp abduction (it passes over
+    reaching hand, fingers straight (OPEN_MARGIN_DEG off the stops of joints whose range starts at
+    0) and the thumb extended at its grasp abduction (it passes over
     the other hand's web space and closes onto its back); ``effort_dir`` 1 on every flexing joint
     (all but the thumb's abduction); ``q_max`` the joints' upper limits ``upper_rad`` less the
     grasp's limit margin (GraspSettings.limit_margin_deg)."""
     grasp_q = np.asarray(grasp.partner_q, float)
-    open_q = np.zeros_like(grasp_q)
+    open_q = np.maximum(0.0, np.asarray(lower_rad, float) + np.radians(OPEN_MARGIN_DEG))
     rot = PARTNER_JOINTS.index("thumb_rot")
     open_q[rot] = grasp_q[rot]
     effort_dir = np.ones_like(grasp_q)

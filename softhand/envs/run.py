@@ -13,6 +13,7 @@ from softhand import __version__
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.skins import calibrated_max_force, skin_of_pair
+from softhand.hands.config import HandConfig
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
 from softhand.sensors.device import ASSUMPTIONS
@@ -60,8 +61,48 @@ class HandshakeRun:
     controller: dict = field(default_factory=dict)
     #: per frame: the partner's summed digit force and its target (N)
     partner_grip_N: np.ndarray | None = None
+    #: per frame: normal force between the two palms (thenars included) and between the hands (N)
+    palm_force_N: np.ndarray | None = None
     #: the episode: sensored hand, partner's hand size (mm), seed, softhand version
     episode: dict = field(default_factory=dict)
+
+    def grasp_checks(self) -> dict:
+        """What a hand biomechanist checks (softhand.hands.grasp.grasp_metrics), from the
+        recorded frames: at mid-shake, the palm-to-palm share of the force between the hands
+        (palms and thenars, %), each thumb pad in the other hand's frame (mm; z > half the
+        other's thickness is over its back), the palms' gap (mm); over the episode, the deepest
+        self-penetration of each hand (mm) and the partner's smallest joint margin while it holds
+        the hand (deg)."""
+        from softhand.hands.grasp import grasp_metrics
+        from softhand.hands.layout import hand_layout
+
+        m = self.model
+        d = mujoco.MjData(m)
+        layouts = [hand_layout(HandConfig(hand_length_m=v / 1e3, hand_width_m=w / 1e3))
+                   for v, w in ((190.0, 88.0), self.episode.get("partner_size_mm", (190, 88)))]
+        shake = [i for i, p in enumerate(self.phase) if p == "shake"]
+        mid = shake[len(shake) // 2] if shake else len(self.phase) // 2
+        worst = {"prosthetic": 0.0, "partner": 0.0}
+        margin = np.inf
+        at_mid: dict = {}
+        for k in range(len(self.time_s)):
+            d.qpos[:] = self.qpos[k]
+            d.mocap_pos[:], d.mocap_quat[:] = self.mocap_pos[k], self.mocap_quat[k]
+            mujoco.mj_kinematics(m, d)
+            g = grasp_metrics(m, d, *layouts)
+            for hand, v in g["self_penetration_mm"].items():
+                worst[hand] = max(worst[hand], v)
+            if self.phase[k] in ("grip", "shake"):
+                margin = min(margin, g["partner_limit_margin_deg"])
+            if k == mid:
+                at_mid = g
+        palm, total = self.palm_force_N[mid] if self.palm_force_N is not None else (0.0, 0.0)
+        return {"t_mid_shake_s": float(self.time_s[mid]),
+                "palm_to_palm_share_pct": float(100 * palm / total) if total > 0 else 0.0,
+                "palm_gap_mm": at_mid.get("palm_gap_mm", {}),
+                "thumb_tip_in_other_mm": at_mid.get("thumb_tip_in_other_mm", {}),
+                "self_penetration_mm": worst,
+                "partner_limit_margin_deg": float(margin)}
 
     def grip_tracking(self) -> dict[str, float]:
         """How well the partner's summed digit force followed its target while it held the hand
@@ -223,7 +264,8 @@ class HandshakeRun:
                 "force_accounting": self.force_accounting(),
                 "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s,
-                "episode": dict(self.episode), "partner_grip": self.grip_tracking()}
+                "episode": dict(self.episode), "partner_grip": self.grip_tracking(),
+                "grasp_checks": self.grasp_checks()}
         if self.representations:
             out["representations"] = dict(self.representations)
         if self.sensor_spec:
@@ -235,6 +277,23 @@ class HandshakeRun:
         if relax:
             out["relaxation"] = relax
         return out
+
+
+#: The palm's surface pieces of each hand, thenar included (the thenar eminence is palm).
+PALM_PIECES = {"prosthetic": ("Palm1", "Palm2", "Thenar"), "partner": ("palm", "thumb_metacarpal")}
+
+
+def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray) -> tuple[float, float]:
+    """Normal force (N) between the two hands' palm pieces, and between the hands in all."""
+    con = d.contact
+    adr = con.efc_address
+    live = adr >= 0
+    if not live.any():
+        return 0.0, 0.0
+    g, f = con.geom[live], d.efc_force[adr[live]]
+    palm = (np.isin(g[:, 0], pro) & np.isin(g[:, 1], hum)) | (np.isin(g[:, 1], pro)
+                                                               & np.isin(g[:, 0], hum))
+    return float(f[palm].sum()), float(f.sum())
 
 
 def mean_curvature_radius(model: mujoco.MjModel, geom: int) -> float:
@@ -416,8 +475,10 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     m, d = env.model, env.data
     zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
+    palms = [np.array([m.geom(f"{prefix}{p}").id for p in pieces]) for prefix, pieces in
+             (("pro_skin_", PALM_PIECES["prosthetic"]), ("hum_tissue_", PALM_PIECES["partner"]))]
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc", "sf", "pf", "s", "g")}
+                                                "acc", "sf", "pf", "s", "g", "pp")}
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
                   for g in env.region_geoms]
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
@@ -438,6 +499,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["s"].append([info["sensor_readings_N"][r] for r in env.region_names])
             frames["ph"].append(info["phase"])
             frames["g"].append((info["partner_grip_measured_N"], info["partner_grip_N"]))
+            frames["pp"].append(_palm_to_palm(d, *palms))
             area, rigid, rows = areas(d)
             frames["c"].append(rows)
             frames["a"].append(area)
@@ -466,7 +528,7 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                         env.sensors.spec.to_dict(),
                         {"name": controller, "signal": signal if controller != "open-loop" else
                          None, **dict(controller_settings or {})},
-                        np.array(frames["g"]),
+                        np.array(frames["g"]), np.array(frames["pp"]),
                         {"hand": env.hand, "partner_size_mm": list(env.partner_size_mm),
                          "seed": seed, "options": dict(options or {}),
                          "softhand_version": __version__})

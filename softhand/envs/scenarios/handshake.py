@@ -88,7 +88,7 @@ class HandshakeScenario(Scenario):
         self._config = env.config
         #: the handshake's grasp, solved from its contacts for these two hands (cached)
         self.grasp = solve_grasp(env.config)
-        self._upper = m.actuator_ctrlrange[env._grip_act, 1].copy()
+        self._range = m.actuator_ctrlrange[env._grip_act].copy()
         self.thumb_rotation_rad = float(self.grasp.prosthetic_q[
             PROSTHETIC_MOTOR_JOINTS.index("thumb_rot")])
         rot_motor = m.actuator("pro_thumb_rot_motor").id
@@ -110,7 +110,7 @@ class HandshakeScenario(Scenario):
         # on GRIP_PHALANGES phalanges, summed
         self.script = PartnerScript(self.timeline.scaled(factor), start, contact,
                                     grip_force_N=grip * GRIP_PHALANGES, shake_phase=phase,
-                                    **partner_postures(self.grasp, self._upper))
+                                    **partner_postures(self.grasp, *self._range.T))
         self._relaxed = RelaxedHand(self.script.timeline, self.grasp.prosthetic_q,
                                     PROSTHETIC_MOTOR_JOINTS.index("thumb_rot"))
         self._grip_measured = 0.0
