@@ -22,7 +22,7 @@ RUNS = {"contact": ("contact", "interface"), "sensor under the outer layer": ("s
 
 def held_forces(signal: str, placement: str, seed: int = 0) -> dict[str, float]:
     """Per finger the mean true force of its most loaded region over the shake, and the peak
-    Palm2 reading (N on the sensor patch)."""
+    Palm1 reading (N on the sensor patch)."""
     env = gym.make("softhand/Handshake-v0", design="pocket2-sil", sensor_placement=placement)
     controller = Neutral(signal=signal)
     obs, info = env.reset(seed=seed)
@@ -30,7 +30,7 @@ def held_forces(signal: str, placement: str, seed: int = 0) -> dict[str, float]:
     palm = 0.0
     while True:
         obs, _reward, terminated, truncated, info = env.step(controller(obs, info))
-        palm = max(palm, info["sensor_readings_N"]["Palm2"])
+        palm = max(palm, info["sensor_readings_N"]["Palm1"])
         if info["phase"] == "shake":
             for f in FINGERS:
                 held[f].append(max(v for k, v in info["region_forces_N"].items()
@@ -38,16 +38,16 @@ def held_forces(signal: str, placement: str, seed: int = 0) -> dict[str, float]:
         if terminated or truncated:
             break
     env.close()
-    return {**{f: float(np.mean(v)) for f, v in held.items()}, "Palm2 reading": palm}
+    return {**{f: float(np.mean(v)) for f, v in held.items()}, "Palm1 reading": palm}
 
 
 def main(seed: int = 0) -> dict[str, dict[str, float]]:
     out = {label: held_forces(*how, seed=seed) for label, how in RUNS.items()}
     print("force held during the shake per finger (N, true contact force), neutral controller:")
-    print(f"{'fed':32s}" + "".join(f"{f:>9s}" for f in FINGERS) + "  Palm2 reading N")
+    print(f"{'fed':32s}" + "".join(f"{f:>9s}" for f in FINGERS) + "  Palm1 reading N")
     for label, v in out.items():
         print(f"{label:32s}" + "".join(f"{v[f]:9.2f}" for f in FINGERS)
-              + f"  {v['Palm2 reading']:.2f}")
+              + f"  {v['Palm1 reading']:.2f}")
     return out
 
 
