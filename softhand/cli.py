@@ -659,6 +659,7 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
     and a Fig. 4-style figure against the paper's set."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.population import population_summary, run_partner, sample_partners
+    from softhand.fem.sweep import git_revision
     from softhand.io import atomic_write_text, interrupts_deferred
     from softhand.parallel import available_cpus, run_tasks
     from softhand.viz.population import population_figure
@@ -692,7 +693,8 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
             meta = {"n": n, "seed": seed, "hand": hand,
                     "design": "human tissue" if hand == "human" else design or "pocket2-sil",
                     "controller": controller, "finished": len(results), "missing": missing,
-                    "version": __version__}
+                    "version": __version__, "git_revision": git_revision(),
+                    "command": "softhand population " + " ".join(sys.argv[2:])}
             atomic_write_text(out / "partners.json",
                               json.dumps([p.to_dict() for p in partners], indent=1))
             atomic_write_text(out / "results.json", json.dumps(
@@ -708,8 +710,9 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
                     res["grip"]["p95_error_pct"],
                     res["force_accounting"]["bone_on_bone_peak_N"])))
             atomic_write_text(out / "results.csv", "\n".join(rows) + "\n")
-            title = (f"{len(results)} partners, {hand} hand, {meta['design']}, "
-                     f"{controller} controller")
+            title = (f"{len(results)} partners, the relaxed human hand (human tissue)"
+                     if hand == "human" else f"{len(results)} partners, prosthetic hand, "
+                     f"{meta['design']}, {controller} controller")
             population_figure([r["peak_N"] for r in results],
                               paper()["handshake"]["over_2N"], out / "fig4.png", title=title)
         click.echo("| region | partners over 2 N % | median peak N | 10-90 % peak N | paper |\n"
