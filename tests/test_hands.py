@@ -170,7 +170,7 @@ def test_partner_tissues_listed(scene):
     spec, model = scene
     names = partner_tissue_geoms(model, "hum_")
     assert names == partner_tissue_geoms(spec, "hum_")
-    assert len(names) == 2 + 3 + 12 and "hum_tissue_palm" in names and "hum_tissue_back" in names
+    assert len(names) == 1 + 3 + 12 and "hum_tissue_palm" in names  # one palm piece: no seam
     with pytest.raises(ValueError, match="hum_tissue_palm"):
         partner_tissue_geoms(build_prosthetic_hand().compile(), "hum_")
 
@@ -280,7 +280,7 @@ def test_each_hand_is_one_layer_of_soft_geoms(build, prefix, soft):
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     geoms = [g for g in range(model.ngeom) if model.geom(g).name.startswith(prefix + soft)]
-    assert len(geoms) == (19 if prefix == "pro_" else 17)
+    assert len(geoms) == (19 if prefix == "pro_" else 16)  # the partner's palm is one piece
     ft = np.zeros(6)
     worst = min((mujoco.mj_geomDistance(model, data, a, b, 0.01, ft), model.geom(a).name,
                  model.geom(b).name) for a in geoms for b in geoms if a < b)
@@ -475,3 +475,37 @@ def test_mjcf_files_are_up_to_date(tmp_path):
 def test_bad_config_raises_value_error_naming_value(make, value):
     with pytest.raises(ValueError, match=value.replace("(", r"\(").replace(")", r"\)")):
         make()
+
+
+def test_one_tissue_geom_under_the_partners_ulnar_border():
+    """The grasp's fingers wrap the partner's ulnar border, where the palm's palmar and dorsal
+    halves used to meet: a finger-sized sphere (8 mm) pressed 2 mm into the border at the palm's
+    mid-plane makes one contact with the partner's tissue, 2 mm deep (two halves made two, and
+    the same indentation was resisted twice)."""
+    layout = hand_layout(HandConfig())
+    spec = build_partner_hand()
+    probe = spec.worldbody.add_body(name="probe")
+    probe.add_freejoint()  # a free body: MuJoCo skips contacts between two static bodies
+    probe.add_geom(name="probe", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.008, 0, 0],
+                   contype=0, conaffinity=0)
+    tissues = partner_tissue_geoms(spec)
+    for name in tissues:
+        spec.add_pair(geomname1="probe", geomname2=name)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    little = layout.digits["little"]
+    x = 0.5 * (little.cmc_m[0] + little.base_m[0])
+    palm, ft = model.geom("hum_tissue_palm").id, np.zeros(6)
+    lo, hi = -0.1, 0.0  # y of the probe's centre: far out on the ulnar side .. the mid-line
+    for _ in range(60):  # bisect for a 2 mm overlap with the palm at its mid-plane (z = 0)
+        y = 0.5 * (lo + hi)
+        data.qpos[-7:-4] = [x, y, 0.0]
+        mujoco.mj_forward(model, data)
+        d = mujoco.mj_geomDistance(model, data, model.geom("probe").id, palm, 0.05, ft)
+        lo, hi = (y, hi) if d > -0.002 else (lo, y)
+    mujoco.mj_forward(model, data)
+    ids = {model.geom(t).id for t in tissues}
+    touching = [c for c in data.contact[:data.ncon] if set(c.geom) & ids]
+    assert len(touching) == 1, [(model.geom(c.geom[0]).name, model.geom(c.geom[1]).name, c.dist)
+                                for c in touching]
+    assert touching[0].dist == pytest.approx(-0.002, abs=1e-4)

@@ -10,9 +10,9 @@ Both hands use the same pieces, built from the layout (:mod:`softhand.hands.layo
 - the palm: the convex hull of the four finger metacarpals' envelopes (capsules of radius t / 2
   from CMC to MCP, so the palm is W wide at the MCPs and t thick), clipped by the wrist-crease plane,
   one plane through each pair of neighbouring MCP centres (where the proximal phalanges begin), a
-  plane parallel to the thenar's axis at the thenar's radius (the thenar is its own piece), then cut
-  into pieces by further planes: palmar / dorsal (z = 0) and, for the prosthetic's four regions,
-  proximal / distal. Clipping a convex hull by planes keeps it convex, and pieces that share a
+  plane parallel to the thenar's axis at the thenar's radius (the thenar is its own piece); the
+  partner keeps it whole (PALM_CUTS), the prosthetic's four regions cut it by further planes,
+  palmar / dorsal (z = 0) and proximal / distal. Clipping a convex hull by planes keeps it convex, and pieces that share a
   cutting plane lie on opposite sides of it, so they cannot overlap.
 
 Each piece is returned in its body's frame (the hand frame for the palm, the digit frame for a
@@ -32,7 +32,7 @@ from scipy.spatial import ConvexHull
 from softhand.hands import constants as const
 from softhand.hands.layout import HandLayout
 
-__all__ = ["Piece", "clip_hull", "hand_pieces", "palm_hull_points", "thenar_axis"]
+__all__ = ["PALM_CUTS", "Piece", "clip_hull", "hand_pieces", "palm_hull_points", "thenar_axis"]
 
 _SPHERE_POINTS = 120  # points per end sphere of a metacarpal envelope (Fibonacci lattice)
 
@@ -152,23 +152,32 @@ def _palm_piece(points: np.ndarray, cuts) -> np.ndarray:
     return points
 
 
-def hand_pieces(layout: HandLayout, *, split_palm: bool) -> list[Piece]:
+#: How a hand's palm is cut into pieces (hand_pieces): ``whole`` one convex piece, palmar and
+#: dorsal sides and borders together (the partner's tissue: no seam, so no indentation at its
+#: borders is resisted twice); ``quarters`` palmar / dorsal x proximal / distal (the prosthetic's
+#: Palm1, Palm2, Back1, Back2 regions, each with its own sensor).
+PALM_CUTS = ("whole", "quarters")
+
+
+def hand_pieces(layout: HandLayout, *, palm: str) -> list[Piece]:
     """The envelope pieces of a hand (see the module docstring).
 
     Args:
         layout: the hand's numbers.
-        split_palm: also cut the palm and back into proximal and distal halves at half the palm
-            length (the prosthetic hand's Palm1/Palm2 and Back1/Back2 regions).
+        palm: how the palm is cut (PALM_CUTS).
     """
+    if palm not in PALM_CUTS:
+        raise ValueError(f"palm = {palm!r}: allowed {', '.join(PALM_CUTS)}")
     pieces: list[Piece] = []
     base = _palm_piece(palm_hull_points(layout), _palm_cuts(layout))
+    if palm == "whole":
+        pieces.append(Piece("palm", "palm", "mesh", vertices=base))
     sides = {"palm": (np.array([0.0, 0.0, 1.0]), 0.0), "back": (np.array([0.0, 0.0, -1.0]), 0.0)}
     x_split = 0.5 * layout.palm_length_m
     for side, (normal, offset) in sides.items():
+        if palm == "whole":
+            break
         half = clip_hull(base, normal, offset)
-        if not split_palm:
-            pieces.append(Piece(side, "palm", "mesh", vertices=half))
-            continue
         pieces.append(Piece(f"{side}_proximal", "palm", "mesh",
                             vertices=clip_hull(half, [1.0, 0.0, 0.0], x_split)))
         pieces.append(Piece(f"{side}_distal", "palm", "mesh",

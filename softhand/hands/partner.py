@@ -17,9 +17,10 @@ maximal grip force shared by four fingers acting at the proximal phalanx ([Mathi
 Contact geoms: ``tissue_{piece}`` (contype = conaffinity = 0: contacts only through explicit
 ``<pair>`` elements): the hand's soft envelope as one layer of convex pieces
 (:mod:`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
-on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull cut at its
-mid-plane into ``tissue_palm`` (palmar, borders included) and ``tissue_back`` (dorsal). No point lies
-inside two tissue geoms at rest, so no indentation is resisted by two laws at once.
+on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull as one piece,
+``tissue_palm`` (palmar and dorsal sides and borders: the grasp's fingers wrap the ulnar border,
+where a seam between two pieces resisted one indentation twice). No point lies inside two tissue
+geoms at rest, so no indentation is resisted by two laws at once.
 List them with partner_tissue_geoms(). Each has a contact sensor ``feel_{piece}`` on its contacts
 (one net-force slot: found, force xyz in the world frame): what the partner feels there, whatever
 touches it. Rigid bones (``bone_*``) collide with the prosthetic bones.
@@ -63,7 +64,6 @@ _TISSUE_RGBA = (0.87, 0.68, 0.58, 0.5)
 #: Segments carrying a tissue geom, in the order partner_tissue_geoms() returns them.
 TISSUE_SEGMENTS: tuple[str, ...] = (
     "palm",
-    "back",
     "thumb_metacarpal",
     "thumb_proximal",
     "thumb_distal",
@@ -177,7 +177,7 @@ def add_partner_hand(
         )
 
     # Tissues: one layer of envelope pieces, each with the sensor of what the partner feels there.
-    pieces = {p.name: p for p in hand_pieces(layout, split_palm=False)}
+    pieces = {p.name: p for p in hand_pieces(layout, palm="whole")}
     if set(pieces) != set(TISSUE_SEGMENTS):
         raise RuntimeError(f"tissue pieces {sorted(pieces)} do not match {TISSUE_SEGMENTS}")
     for name in TISSUE_SEGMENTS:

@@ -255,7 +255,7 @@ def add_prosthetic_hand(
     regions_ = paper_regions()
 
     # Skins: every envelope piece; sensing regions also get a zone and a contact sensor.
-    pieces = {p.name: p for p in hand_pieces(layout, split_palm=True)}
+    pieces = {p.name: p for p in hand_pieces(layout, palm="quarters")}
     skin_of = {REGION_PIECES[r]: r for r in regions_}
     skin_of.update({piece: name for name, (piece, _) in UNSENSED_SKINS.items()})
     if set(skin_of) != set(pieces):
