@@ -12,8 +12,9 @@ Both hands use the same pieces, built from the layout (:mod:`softhand.hands.layo
   one plane through each pair of neighbouring MCP centres (where the proximal phalanges begin), a
   plane parallel to the thenar's axis at the thenar's radius (the thenar is its own piece); the
   partner keeps it whole (PALM_CUTS), the prosthetic's four regions cut it by further planes,
-  palmar / dorsal (z = 0) and proximal / distal. Clipping a convex hull by planes keeps it convex, and pieces that share a
-  cutting plane lie on opposite sides of it, so they cannot overlap.
+  palmar / dorsal (z = 0) and proximal / distal. Clipping a convex hull by planes keeps it
+  convex, and pieces that share a cutting plane lie on opposite sides of it, so they cannot
+  overlap.
 
 Each piece is returned in its body's frame (the hand frame for the palm, the digit frame for a
 phalanx; :mod:`softhand.hands.skeleton`). Joint flexion folds two trimmed capsules into each
