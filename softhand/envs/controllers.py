@@ -118,8 +118,8 @@ class ForceRegulating:
 
 @dataclass
 class Neutral:
-    """Close each digit at ``speed`` until its most loaded region exceeds ``touch_N``, then hold;
-    the thumb rotates to the grasp's rotation."""
+    """Close each digit at ``speed`` until its most loaded region (the thumb: its pad, Thumb2)
+    exceeds ``touch_N``, then hold; the thumb rotates to the grasp's rotation."""
 
     speed: float = 0.5
     touch_N: float = 0.3
@@ -141,7 +141,10 @@ class Neutral:
             return a
         forces = info[SIGNALS[self.signal]]
         for i, digit in enumerate(_DIGITS):
-            touching = max(v for k, v in forces.items() if k.startswith(digit)) > self.touch_N
+            # the thumb closes until its pad (Thumb2) touches: its proximal phalanx lies in the
+            # partner's web space from the start and would stop it in the air over the back
+            keys = ("Thumb2",) if digit == "Thumb" else [k for k in forces if k.startswith(digit)]
+            touching = max(forces[k] for k in keys) > self.touch_N
             self._held[i] |= touching
             a[i] = 0.0 if self._held[i] else self.speed
         # the thumb rotates towards the back of the partner's index metacarpal until it touches
