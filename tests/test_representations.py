@@ -134,7 +134,7 @@ def test_relaxation_on_the_hand_runs_a_handshake_and_is_the_written_mjcf():
     pull when the shake unloads it, where QLV's hereditary force goes negative; silicone 3.7 %);
     the region forces are lower than the memoryless soft contact's (the skin relaxes). Only the
     force along a pad's axis goes through the skin's law: 55 % of the force between the hands in
-    the old clearance-rule scene, 35 % in the grasp solved from the handshake's contacts (fingers
+    the old clearance-rule scene, 38 % in the grasp solved from the handshake's contacts (fingers
     cross the pads from the side); the rest meets the tissue's law alone, which the accounting
     reports (README: a shortfall of the pads in a real handshake). The MJCF of the spec loads in
     plain MuJoCo."""
