@@ -15,12 +15,11 @@ return     mount goes back to its start pose, 0.75 s
 
 Grip: the partner reaches with an open hand, closes to its grasp posture (solved from the
 handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impedance towards the
-grasp plus a flexion offset): it regulates the mean force its digits feel over the phalanges that
-touch the prosthesis (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors on
-the subjects' fingers did; the palm and thenar are left out, so that a push on the palm does not
-open the fingers) to 2.5 N (the average
-grip force measured with data gloves, Melnyk et al. 2014) times ``squeeze``; an integral
-controller sets the effort. Shake amplitude: +-5 mm
+grasp plus a flexion offset): a PI regulator sets the effort so that the summed force its
+phalanges feel (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors
+on the subjects' fingers; the palm and thenar are left out, so that a push on the palm does not
+open the fingers) follows 2.5 N (a data glove's mean per sensor, Melnyk et al. 2014) times
+``squeeze`` times GRIP_PHALANGES. Shake amplitude: +-5 mm
 vertically (assumption: only the *relative* motion of the two hands is modelled; the arm's gross
 shake moves both hands together and is left out, "a scene models only what it needs").
 """
