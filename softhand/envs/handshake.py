@@ -41,8 +41,9 @@ class HandshakeEnv(TwoHandTouchEnv):
     every contact between them is a calibrated soft contact (the skin in series with human tissue,
     fitted to 20 N, calibrated to 7 N: a contact above that raises a ``CalibratedRangeWarning``
     once per pair and episode). Each region's reading is a contact sensor on its skin's contacts
-    inside its sensor zone (the contact side; the rest is unsensed skin). The partner regulates
-    the force its digits feel; its grip acts once per action step, its arm every step.
+    inside its sensor zone (the contact side; the rest is unsensed skin), plus its bone where it
+    bottoms out there. The partner regulates the summed force its phalanges feel; its grip acts
+    once per action step, its arm every step.
 
     Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
     (positive closes; the maximum closes a digit from open in about 1 s):
