@@ -198,5 +198,3 @@ class HandshakeEnv(TwoHandTouchEnv):
                          timestep_s=timestep_s, calibration_dir=calibration_dir, sensor=sensor,
                          sensor_placement=sensor_placement, observe=observe,
                          sensor_dir=sensor_dir, partner_size=partner_size, hand=hand)
-        self.squeeze, self.overload_N = scenario.squeeze, scenario.overload_N
-        self.weights, self.randomize = scenario.weights, scenario.randomize
