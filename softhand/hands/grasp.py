@@ -173,13 +173,6 @@ class _Problem:
                                   for j in PARTNER_JOINTS])
         self.pro_qpos = np.array([m.jnt_qposadr[m.joint(f"pro_{j}").id]
                                   for j in PROSTHETIC_MOTOR_JOINTS])
-        # joint couplings of the prosthetic (equality polycoef: q1 = c0 + c1 q2)
-        self.couplings = []
-        for e in range(m.neq):
-            if m.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and m.eq(e).name.startswith("pro_"):
-                j1, j2 = m.eq_obj1id[e], m.eq_obj2id[e]
-                self.couplings.append((int(m.jnt_qposadr[j1]), int(m.jnt_qposadr[j2]),
-                                       float(m.eq_data[e, 0]), float(m.eq_data[e, 1])))
         self.pro_palm_body = m.body("pro_palm").id
         self.hum_palm_body = m.body("hum_palm").id
         # self-contact pairs: thumb pieces x finger phalanges, neighbouring fingers
@@ -237,8 +230,7 @@ class _Problem:
         d.qpos[self.arm_qpos + 3:self.arm_qpos + 7] = quat
         d.qpos[self.hum_qpos] = x[6:6 + len(self.hum_qpos)]
         d.qpos[self.pro_qpos] = x[6 + len(self.hum_qpos):]
-        for a1, a2, c0, c1 in self.couplings:
-            d.qpos[a1] = c0 + c1 * d.qpos[a2]
+        _couple(m, d)
         mujoco.mj_kinematics(m, d)
 
     def distance(self, g1: int, g2: int, cap: float = 0.05) -> float:
@@ -248,14 +240,10 @@ class _Problem:
         return self.d.xpos[body] + self.d.xmat[body].reshape(3, 3) @ local
 
     def in_frame(self, body: int, point: np.ndarray) -> np.ndarray:
-        return self.d.xmat[body].reshape(3, 3).T @ (point - self.d.xpos[body])
+        return _in_frame(self.d, body, point)
 
     def pad(self, prefix: str, digit: str, layout: HandLayout) -> np.ndarray:
-        """World position of the pad (palmar surface, mid-length) of a digit's distal phalanx."""
-        dl = layout.digits[digit]
-        body = self.m.body(f"{prefix}{digit}_distal").id
-        return self.hand_point(body, np.array([0.5 * dl.lengths_m["distal"], 0.0,
-                                               -dl.radii_m["distal"]]))
+        return _pad(self.m, self.d, prefix, digit, layout)
 
     # --- residuals -----------------------------------------------------------------------------
     def residual(self, x: np.ndarray, *, contacts: bool) -> np.ndarray:
@@ -415,12 +403,32 @@ def set_grasp_state(model: mujoco.MjModel, data: mujoco.MjData, grasp: Grasp, *,
     if prosthetic:
         for j, q in zip(PROSTHETIC_MOTOR_JOINTS, grasp.prosthetic_q, strict=True):
             data.qpos[model.jnt_qposadr[model.joint(f"pro_{j}").id]] = q
-        for e in range(model.neq):
-            if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT:
-                a1 = model.jnt_qposadr[model.eq_obj1id[e]]
-                a2 = model.jnt_qposadr[model.eq_obj2id[e]]
-                data.qpos[a1] = model.eq_data[e, 0] + model.eq_data[e, 1] * data.qpos[a2]
+        _couple(model, data)
     mujoco.mj_kinematics(model, data)
+
+
+def _couple(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Set every joint coupled by a joint equality (q1 = c0 + c1 q2, the prosthetic's couplings)
+    from its driver in ``data.qpos``."""
+    for e in range(model.neq):
+        if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT:
+            a1 = model.jnt_qposadr[model.eq_obj1id[e]]
+            a2 = model.jnt_qposadr[model.eq_obj2id[e]]
+            data.qpos[a1] = model.eq_data[e, 0] + model.eq_data[e, 1] * data.qpos[a2]
+
+
+def _in_frame(data: mujoco.MjData, body: int, point: np.ndarray) -> np.ndarray:
+    """``point`` (world) in ``body``'s frame."""
+    return data.xmat[body].reshape(3, 3).T @ (point - data.xpos[body])
+
+
+def _pad(model: mujoco.MjModel, data: mujoco.MjData, prefix: str, digit: str,
+         layout: HandLayout) -> np.ndarray:
+    """World position of the pad (palmar surface, mid-length) of a digit's distal phalanx."""
+    dl = layout.digits[digit]
+    body = model.body(f"{prefix}{digit}_distal").id
+    return data.xpos[body] + data.xmat[body].reshape(3, 3) @ np.array(
+        [0.5 * dl.lengths_m["distal"], 0.0, -dl.radii_m["distal"]])
 
 
 def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
@@ -440,18 +448,11 @@ def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
     def gd(a: str, b: str) -> float:
         return mujoco.mj_geomDistance(model, data, model.geom(a).id, model.geom(b).id, 0.05, dist)
 
-    def frame(body: str):
-        b = model.body(body).id
-        return data.xpos[b], data.xmat[b].reshape(3, 3)
-
     def pad(prefix: str, digit: str, layout: HandLayout) -> np.ndarray:
-        dl = layout.digits[digit]
-        p, r = frame(f"{prefix}{digit}_distal")
-        return p + r @ np.array([0.5 * dl.lengths_m["distal"], 0.0, -dl.radii_m["distal"]])
+        return _pad(model, data, prefix, digit, layout)
 
     def local(body: str, point: np.ndarray) -> np.ndarray:
-        p, r = frame(body)
-        return r.T @ (point - p)
+        return _in_frame(data, model.body(body).id, point)
 
     out: dict = {
         "palm_gap_mm": {p: 1e3 * gd(f"pro_skin_{p}", "hum_tissue_palm") for p in ("Palm1", "Palm2")},
