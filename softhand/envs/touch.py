@@ -141,11 +141,13 @@ class TwoHandTouchEnv(gym.Env):
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
         self._pro_dof = m.jnt_dofadr[self._pro_joints]
-        self._thumb_rot_qpos = int(m.jnt_qposadr[m.joint("pro_thumb_rot").id])
+        #: qpos address of the sensored thumb's rotation (a scenario may pre-shape it)
+        self.thumb_rotation_qpos = int(m.jnt_qposadr[m.joint("pro_thumb_rot").id])
         self._pro_act = np.array([m.actuator(a).id for a in prosthetic_actuators()])
         self._max_speed = m.actuator_ctrlrange[self._pro_act, 1].copy()
         hum = [m.actuator(a).id for a in partner_actuators()]
-        self._grip_act = np.array(hum[:len(PARTNER_JOINTS)])
+        #: actuator ids of the partner's digit servos, in PARTNER_JOINTS order (a scenario sets them)
+        self.partner_servos = np.array(hum[:len(PARTNER_JOINTS)])
         self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         self._range = np.full((m.ngeom, m.ngeom), np.inf)
@@ -223,7 +225,7 @@ class TwoHandTouchEnv(gym.Env):
         else:
             ctrl[self._pro_act] = a * self._max_speed
         # the partner's digits act once per action step (100 Hz by default), the arm every step
-        ctrl[self._grip_act] = scenario.partner_targets(t, physics.partner_feel(),
+        ctrl[self.partner_servos] = scenario.partner_targets(t, physics.partner_feel(),
                                                         opt.timestep * self.frame_skip)
         k, last = self._step_index, len(self._mount) - 1
         end = k + self.frame_skip
@@ -281,7 +283,7 @@ class TwoHandTouchEnv(gym.Env):
                 "sensor_load_estimate_N": dict(zip(names, estimate.tolist(), strict=True)),
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
                 "saturated_sensors": self._saturated,
-                "thumb_rotation_rad": float(self._qpos[self._thumb_rot_qpos]),
+                "thumb_rotation_rad": float(self._qpos[self.thumb_rotation_qpos]),
                 "contacts_beyond_range": self._beyond + int((self._bone > 0).sum()),
                 "region_bone_N": dict(zip(names, self._bone.tolist(), strict=True)),
                 **self.scenario.info()}

@@ -88,11 +88,11 @@ class HandshakeScenario(Scenario):
         self._config = env.config
         #: the handshake's grasp, solved from its contacts for these two hands (cached)
         self.grasp = solve_grasp(env.config)
-        self._range = m.actuator_ctrlrange[env._grip_act].copy()
+        self._range = m.actuator_ctrlrange[env.partner_servos].copy()
         self.thumb_rotation_rad = float(self.grasp.prosthetic_q[
             PROSTHETIC_MOTOR_JOINTS.index("thumb_rot")])
         rot_motor = m.actuator("pro_thumb_rot_motor").id
-        return ((env._thumb_rot_qpos, int(m.actuator_actadr[rot_motor]), self.thumb_rotation_rad),)
+        return ((env.thumb_rotation_qpos, int(m.actuator_actadr[rot_motor]), self.thumb_rotation_rad),)
 
     def reset(self, env: TwoHandTouchEnv, rng: np.random.Generator,
               options: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
