@@ -37,6 +37,8 @@ import os
 import signal
 import sys
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -54,8 +56,8 @@ from softhand.cli_inputs import (
     bad,
     checked_dir,
     checked_file,
+    cpus_allowed,
     designs_of,
-    guard_shipped,
     make_settings,
     parse_placement_items,
     parse_sensors,
@@ -63,13 +65,12 @@ from softhand.cli_inputs import (
     progress_bar,
     sensor_flag_message,
     sensor_spec_of,
-    shipped_settings_differ,
     with_options,
 )
 from softhand.paper import paper
 from softhand.paths import FE_DIR, REPORTS_DIR, SENSORS_DIR, SKINS_DIR, is_shipped
 
-EXIT_CONVERGENCE, EXIT_INTERRUPTED = 3, 130
+EXIT_CONVERGENCE, EXIT_WRITE, EXIT_INTERRUPTED = 3, 4, 130
 
 
 class Stopped(click.ClickException):
@@ -165,7 +166,9 @@ def fe() -> None:
                    "size in mm (default 4x4) and centre [default: 4x4 mm under the indenter at "
                    "each placement the design has].")
 @click.option("--out", "out_dir", help="Write the curve CSV and summary JSON into this folder.")
-@click.option("--force", is_flag=True, help="Allow --out inside the shipped calibration/.")
+@click.option("--force", is_flag=True,
+              help="Allow --out inside the shipped calibration/ (replaced only when the run "
+                   "completes).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
     """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate."""
@@ -173,22 +176,26 @@ def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
 
     from softhand.fem.solver import ConvergenceError, Status, indent
     from softhand.fem.sweep import write_results
+    from softhand.io import staged_folder
 
     (name,) = designs_of([design])
     settings = make_settings([name], **kw)
     sensors = parse_sensors(sensor_items, name, settings.geometry)
     if sensors is not None:
         settings = replace(settings, sensors=sensors)
-    out = checked_dir(out_dir, "--out")
+    out = checked_dir(out_dir, "--out", force=force, need_bytes=_FE_BYTES)
     if out is not None:
-        guard_shipped(out, complete=False, force=force, what=f"one design ({name})")
+        _check_fe_folder(out, settings, [name])
     try:
         with progress_bar(name, disable=as_json) as progress:
             result = indent(name, settings, progress=progress)
     except ConvergenceError as exc:
         raise Stopped(f"error: {exc}", EXIT_CONVERGENCE) from None
     if out is not None:
-        write_results({name: result}, out, plot=False)
+        with staged_folder(out, stage=is_shipped(out)) as staged, _writing(
+                out, "the folder's earlier files; summary.json was not updated"):
+            write_results({name: result}, staged.path, plot=False)
+            staged.commit()
     if result.status is Status.REACHED_DEPTH:
         click.echo(f"warning: the ramp stopped at --max-depth {settings.max_depth_mm:g} mm with "
                    f"{result.force_N[~result.hold][-1]:.3f} N, before --max-force "
@@ -218,10 +225,49 @@ def _print_result(s: dict[str, Any]) -> None:
                f"{s['newton_iterations']} Newton iterations, {s['wall_s']:.1f} s")
 
 
+#: Bytes an FE folder write takes at most: curves, summary, plot (and their temp copies)
+_FE_BYTES = 2e6
+
+
+def _folder_bytes(path: str | Path) -> int:
+    """Bytes of the files under ``path`` (what a staged copy of it takes)."""
+    root = Path(path)
+    return sum(p.stat().st_size for p in root.rglob("*") if p.is_file()) if root.is_dir() else 0
+
+
+def _check_fe_folder(out: Path, settings, designs: list[str]) -> None:
+    """The FE folder's summary is readable and of the same settings (or replaced whole)."""
+    from softhand.fem.sweep import folder_conflict, read_summary
+
+    try:
+        conflict = folder_conflict(read_summary(out), settings, designs)
+    except ValueError as exc:
+        bad(f"--out: {exc}")
+    if conflict:
+        bad(f"--out {str(out)!r} holds FE curves of other settings ({conflict}): a folder holds "
+            "one setting; write into another folder")
+
+
+@contextmanager
+def _writing(out: Path, kept: str) -> Iterator[None]:
+    """Turn a failure to write (disk full, permissions changed) into one line saying what was
+    kept, exit 4."""
+    try:
+        yield
+    except OSError as exc:
+        what = f"{exc.strerror or exc}" + (f": {exc.filename}" if exc.filename else "")
+        kept = ("the shipped data is unchanged" if is_shipped(out) else f"kept in {out}: {kept}")
+        raise Stopped(f"error: writing into {out} failed ({what}); {kept}", EXIT_WRITE) from None
+
+
 def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[str, str],
-                  interrupted: bool) -> None:
-    """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing."""
-    where = f"wrote {written} of {total} {what} to {out}"
+                  interrupted: bool, *, staged: bool = False) -> None:
+    """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing.
+
+    ``staged``: the run wrote shipped data beside it, so the incomplete set was dropped."""
+    where = (f"the shipped set in {out} is unchanged (an incomplete run never replaces it; the "
+             f"{written} finished {what} were dropped: --out DIR keeps them)" if staged
+             else f"wrote {written} of {total} {what} to {out}")
     if interrupted:
         raise Stopped(f"interrupted ({_STOP['by']}): {where}; missing: {', '.join(missing)}",
                       EXIT_INTERRUPTED)
@@ -237,30 +283,34 @@ def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[
               help="Folder for curves, summary.json and curves.png.")
 @click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
 @click.option("--force", is_flag=True,
-              help="Allow writing a subset, or other settings, into the shipped calibration/.")
+              help="Allow writing into the shipped calibration/ (replaced only when the run "
+                   "completes).")
 def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
     """Indent all 12 designs and compare them with the paper."""
     from softhand.fem.geometry import DESIGNS
     from softhand.fem.sweep import paper_error_table, run_sweep, write_results
-    from softhand.io import interrupts_deferred
+    from softhand.io import interrupts_deferred, staged_folder
 
     names = designs_of(dict.fromkeys(designs or DESIGNS))
     settings = make_settings(names, threads=None, **kw)
-    out = checked_dir(out_dir, "--out")
-    guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
-                   what=f"{len(names)} of the 12 designs")
-    if is_shipped(out) and not force and (diff := shipped_settings_differ(out, settings)):
-        bad(f"--out {str(out)!r} is shipped calibration data made with other settings "
-             f"({', '.join(diff)}); write elsewhere with --out DIR, or add --force")
-    batch = run_sweep(names, settings, threads=threads)
-    missing = {n: "interrupted" for n in batch.missing}
-    missing.update({n: str(e) for n, e in batch.errors.items()})
-    if batch.results:
-        with interrupts_deferred():
-            summary = write_results(batch.results, out, missing=missing,
-                                    plot=not batch.interrupted)  # stop fast: no plot
-        click.echo(paper_error_table(summary))
-    _end_of_batch("designs", len(batch.results), len(names), out, missing, batch.interrupted)
+    shipped = out_dir is not None and is_shipped(out_dir)
+    out = checked_dir(out_dir, "--out", force=force,
+                      need_bytes=_FE_BYTES + (_folder_bytes(out_dir) if shipped else 0))
+    _check_fe_folder(out, settings, names)
+    with staged_folder(out, stage=shipped) as staged:
+        batch = run_sweep(names, settings, threads=threads)
+        missing = {n: "interrupted" for n in batch.missing}
+        missing.update({n: str(e) for n, e in batch.errors.items()})
+        if batch.results:
+            with interrupts_deferred(), _writing(
+                    out, "the curves written before the failure; summary.json was not updated"):
+                summary = write_results(batch.results, staged.path, missing=missing,
+                                        plot=not batch.interrupted)  # stop fast: no plot
+                if not missing:
+                    staged.commit()
+            click.echo(paper_error_table(summary))
+    _end_of_batch("designs", len(batch.results), len(names), out, missing, batch.interrupted,
+                  staged=shipped and not staged.committed)
     click.echo(f"wrote {len(batch.results)} curves, summary.json and curves.png to {out} "
                f"({summary['total_wall_s']:.0f} s of FE)")
 
@@ -305,11 +355,12 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
               help="Folder with the FE curves (as written by `softhand fe sweep`).")
 @with_options((OPT_THREADS,))
 @click.option("--force", is_flag=True,
-              help="Allow writing a subset of skins or representations into the shipped "
-                   "calibration/.")
+              help="Allow writing into the shipped calibration/ (replaced only when the run "
+                   "completes).")
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
 def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) -> None:
     """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
+    from softhand.io import staged_folder
     from softhand.skin.calibrate import fe_curves, skin_names
     from softhand.skin.representations import REPRESENTATIONS
     from softhand.skin.run import calibrate_many, summary_table
@@ -323,12 +374,16 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     for r in reps:
         if r not in REPRESENTATIONS:
             bad(f"--representation {r!r} is unknown; allowed: {', '.join(REPRESENTATIONS)}")
-    out = checked_dir(out_dir, "--out")
-    guard_shipped(out, complete=set(names) == set(known) and set(reps) == set(REPRESENTATIONS),
-                   force=force, what=f"{len(names)} of {len(known)} skins and "
-                                     f"{len(reps)} of {len(REPRESENTATIONS)} representations")
+    shipped = is_shipped(out_dir) if str(out_dir).strip() else False
+    out = checked_dir(out_dir, "--out", force=force,
+                      need_bytes=1e6 + (_folder_bytes(out_dir) if shipped else 0))
     if not str(fe_dir).strip():
         bad("--fe-dir '': expected a folder path, got an empty string")
+    if not Path(fe_dir).is_dir():
+        bad(f"--fe-dir {fe_dir!r}: no such folder (expected the curves of `softhand fe sweep`)")
+    if out.resolve() == Path(fe_dir).resolve():
+        bad(f"--out {out_dir!r} is --fe-dir: the calibration files go into another folder than "
+            "the FE curves they are fitted to")
     from softhand.fem.geometry import DESIGNS
 
     for n in names:  # every FE curve is read and checked before the first fit
@@ -337,11 +392,16 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
                 fe_curves(n, fe_dir)
             except (FileNotFoundError, ValueError) as exc:
                 bad(f"--fe-dir {fe_dir!r}: {exc}")
-    run = calibrate_many(names, reps, out_dir=out, fe_dir=fe_dir, threads=threads,
-                         show_progress=not as_json)
+    with staged_folder(out, stage=shipped) as staged, _writing(
+            out, "the skin files written before the failure"):
+        run = calibrate_many(names, reps, out_dir=staged.path, fe_dir=fe_dir, threads=threads,
+                             show_progress=not as_json)
+        if run.index is not None and not run.missing:
+            staged.commit()
     if run.index is not None:
         click.echo(json.dumps(run.index, indent=1) if as_json else summary_table(run.index))
-    _end_of_batch("skins", len(run.written), len(names), out, run.missing, run.interrupted)
+    _end_of_batch("skins", len(run.written), len(names), out, run.missing, run.interrupted,
+                  staged=shipped and not staged.committed)
 
 
 @main.group()
@@ -419,7 +479,7 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
     indentation, contact area and pressure (the flex representation, which the handshake
     cannot run: softhand.hands.flex_region)."""
     if picture is not None:
-        os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
+        _check_gl()
     from softhand.hands.flex_region import FLEX_REGIONS, press_flex_region
     from softhand.skin.calibrate import skin_names
     from softhand.skin.files import load_calibration
@@ -519,7 +579,7 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     overrides = parse_skin_overrides(skin_items)
-    record = checked_file(record_path, "--record", ".rrd")
+    record = checked_file(record_path, "--record", ".rrd", need_bytes=_RECORDING_BYTES)
     placement = parse_placement_items(placement_items)
     spec = sensor_spec_of(**sensor_kw)
     settings = {}
@@ -609,6 +669,18 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                + (f"; recording: {record}" if record else ""))
 
 
+#: Upper bound of one handshake's recording: 1.7 MB for the default 2.6 s episode, 5 s at most
+_RECORDING_BYTES = 10e6
+
+
+def _check_gl() -> None:
+    """MUJOCO_GL names a backend MuJoCo has (a wrong one fails deep inside the first render)."""
+    value = os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
+    if value not in ("egl", "osmesa", "glfw"):
+        bad(f"MUJOCO_GL = {value!r}: allowed egl (GPU, headless), osmesa (CPU, headless) or "
+            "glfw (a window system)")
+
+
 def _check_hand(hand: str, controller: str, **prosthetic_only) -> None:
     """--hand human takes no prosthetic options: one line naming the first one given."""
     if hand != "human":
@@ -649,8 +721,10 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
 @click.option("--controller", type=click.Choice(["neutral", "open-loop", "force"]),
               default="neutral", show_default=True, help="Controller of the prosthetic hand.")
-@click.option("--workers", "threads", type=click.IntRange(1, 64), default=None,
-              help="Worker processes [default: the CPUs available, at most 4].")
+@click.option("--workers", "threads", type=click.IntRange(min=1), default=None,
+              callback=cpus_allowed,
+              help="Worker processes, at most the CPUs available [default: those CPUs, at most "
+                   "4].")
 @click.option("--out", "out_dir", default="population", show_default=True,
               help="Folder for partners.json, results.json, results.csv and fig4.png.")
 @_OPT_HAND
@@ -661,18 +735,13 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
     from softhand.envs.population import population_summary, run_partner, sample_partners
     from softhand.fem.sweep import git_revision
     from softhand.io import atomic_write_text, interrupts_deferred
-    from softhand.parallel import available_cpus, run_tasks
+    from softhand.parallel import run_tasks
     from softhand.viz.population import population_figure
 
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
-    if threads is not None and threads > available_cpus():
-        bad(f"--workers {threads}: this machine lets softhand run on {available_cpus()} CPUs; "
-            f"allowed 1-{available_cpus()}")
     _check_hand(hand, controller, design=design)
-    out = checked_dir(out_dir, "--out")
-    if is_shipped(out):
-        bad(f"--out {str(out)!r} is inside the shipped calibration data; write elsewhere")
+    out = checked_dir(out_dir, "--out", need_bytes=2e6 + 4e3 * n)
     try:
         HandshakeEnv(design=design, hand=hand)  # the skin and its files, before any work
     except ValueError as exc:
@@ -753,7 +822,7 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
 
     Needs an OpenGL context: MUJOCO_GL=egl (set here when unset) or osmesa.
     """
-    os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
+    _check_gl()
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.run import run_handshake
     from softhand.viz.render import CameraView, SheetFrame, render_sheet, render_state
@@ -864,33 +933,38 @@ def sensors() -> None:
               help="Refit the transfer laws from the records already in --out/fe (no FE run).")
 @with_options((OPT_THREADS,))
 @click.option("--force", is_flag=True,
-              help="Allow writing a subset of the designs into the shipped calibration/.")
+              help="Allow writing into the shipped calibration/ (replaced only when the run "
+                   "completes).")
 def sensors_calibrate(out_dir, designs, fit_only, threads, force) -> None:
     """Run the FE sensor records (0.5 and 2 mm/s to 20 N, 10 s hold) and fit the transfer laws."""
     from softhand.fem.geometry import DESIGNS
+    from softhand.io import staged_folder
     from softhand.sensors import calibrate as cal
 
     names = designs_of(dict.fromkeys(designs or DESIGNS))
-    out = checked_dir(out_dir, "--out")
-    guard_shipped(out, complete=set(names) == set(DESIGNS), force=force,
-                  what=f"{len(names)} of the 12 designs")
+    shipped = is_shipped(out_dir) if str(out_dir).strip() else False
+    out = checked_dir(out_dir, "--out", force=force,
+                      need_bytes=1e6 + (_folder_bytes(out_dir) if shipped else 0))
     if fit_only:
         for n in names:
             try:
                 cal.read_records(out, n)
             except (OSError, ValueError, KeyError) as exc:
                 bad(f"--out {str(out)!r}: {exc} (run without --fit-only to make the records)")
-    else:
-        _, missing, interrupted = cal.run_sensor_fe(names, out, threads=threads)
-        if interrupted:
-            raise Stopped(f"interrupted ({_STOP['by']}): the finished FE records are in "
-                          f"{out / 'fe'}; missing: {', '.join(missing)}; no law was fitted",
-                          EXIT_INTERRUPTED)
-        if missing:
-            raise Stopped(f"error: {len(missing)} FE records did not finish ({', '.join(missing)});"
-                          f" the finished ones are in {out / 'fe'}; no law was fitted",
-                          EXIT_CONVERGENCE)
-    data = cal.fit_all(names, out)  # written at the end, atomically: Ctrl-C leaves the old file
+    kept = "the shipped set is unchanged" if shipped else f"the finished ones are in {out / 'fe'}"
+    with staged_folder(out, stage=shipped) as staged, _writing(
+            out, "the FE records written before the failure; transfer.json is the old one"):
+        if not fit_only:
+            _, missing, interrupted = cal.run_sensor_fe(names, staged.path, threads=threads)
+            if interrupted:
+                raise Stopped(f"interrupted ({_STOP['by']}): {kept}; missing: "
+                              f"{', '.join(missing)}; no law was fitted", EXIT_INTERRUPTED)
+            if missing:
+                raise Stopped(f"error: {len(missing)} FE records did not finish "
+                              f"({', '.join(missing)}); {kept}; no law was fitted",
+                              EXIT_CONVERGENCE)
+        data = cal.fit_all(names, staged.path)  # atomically: Ctrl-C leaves the old file
+        staged.commit()
     for design, per in data["laws"].items():
         errs = ", ".join(f"{v['placement']} {v['fitted'][0]['rms_pct']:.2f}/"
                          f"{(v['validated'] or [{'rms_pct': float('nan')}])[0]['rms_pct']:.2f} %"

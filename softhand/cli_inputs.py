@@ -6,7 +6,6 @@ value and the allowed range; exit status 2). :mod:`softhand.cli` builds the comm
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 from collections.abc import Callable, Iterator
@@ -16,7 +15,7 @@ from typing import NoReturn
 
 import click
 
-from softhand.paths import is_shipped
+from softhand.paths import CALIBRATION_DIR, is_shipped
 
 EXIT_INPUT = 2
 
@@ -61,33 +60,57 @@ class Number(click.ParamType):
         return v
 
 
-def checked_dir(path: str | None, flag: str) -> Path | None:
-    from softhand.io import check_writable_dir
+def checked_dir(path: str | None, flag: str, *, force: bool | None = None,
+                need_bytes: float = 0.0) -> Path | None:
+    """``path`` as a folder this command may write, checked before any work.
+
+    ``force`` is the command's ``--force`` (None: the command has none and never writes shipped
+    data); ``need_bytes``: what the run writes, checked against the disk's free space.
+    """
+    from softhand.io import check_free_space, check_writable_dir
 
     if path is None:
         return None
     try:
-        return check_writable_dir(path, name=flag)
+        if str(path).strip():  # shipped first: the writability probe touches the folder
+            _check_shipped(Path(path), flag, force)
+        out = check_writable_dir(path, name=flag)
+        if need_bytes:
+            check_free_space(out, need_bytes, name=flag)
     except ValueError as exc:
         bad(str(exc))
+    return out
 
 
-def checked_file(path: str | None, flag: str, suffix: str) -> Path | None:
-    from softhand.io import check_writable_file
+def checked_file(path: str | None, flag: str, suffix: str, *,
+                 need_bytes: float = 0.0) -> Path | None:
+    """``path`` as a file this command may write (never into the shipped data), before any
+    work; ``need_bytes`` as in :func:`checked_dir`."""
+    from softhand.io import check_free_space, check_writable_file
 
     if path is None:
         return None
     try:
-        return check_writable_file(path, suffix=suffix, name=flag)
+        if str(path).strip():
+            _check_shipped(Path(path), flag, None)
+        out = check_writable_file(path, suffix=suffix, name=flag)
+        if need_bytes:
+            check_free_space(out, need_bytes, name=flag)
     except ValueError as exc:
         bad(str(exc))
+    return out
 
 
-def guard_shipped(out: Path, *, complete: bool, force: bool, what: str) -> None:
-    """Refuse to write an incomplete set into the shipped calibration unless ``--force``."""
-    if is_shipped(out) and not complete and not force:
-        bad(f"--out {str(out)!r} is shipped calibration data and this run would replace it with "
-             f"{what}; write elsewhere with --out DIR, or add --force")
+def _check_shipped(out: Path, flag: str, force: bool | None) -> None:
+    """Shipped data is written only with ``--force``, and only by the commands that make it."""
+    if not is_shipped(out) or force:
+        return
+    if force is None:
+        bad(f"{flag} {str(out)!r} is inside the shipped calibration data ({CALIBRATION_DIR}), "
+            "which this command never writes: write elsewhere")
+    bad(f"{flag} {str(out)!r} is the shipped calibration data: add --force to replace it (the "
+        "new set replaces the old only when the run completes; an interrupted or failed run "
+        "leaves it byte for byte), or write elsewhere with --out DIR")
 
 
 @contextmanager
@@ -136,7 +159,18 @@ _OPT_GEOMETRY = click.option("--geometry", multiple=True, metavar="KEY=VALUE",
 _OPT_MATERIALS = click.option("--materials", "materials_path",
                               help="JSON file with material constants replacing Table 3, "
                                    "e.g. {\"sil\": {\"mu_MPa\": [0.08, 0.01]}}.")
+def cpus_allowed(ctx, param, value):
+    """--threads / --workers: at most the CPUs this process may run on (more only queue)."""
+    from softhand.parallel import available_cpus
+
+    if value is not None and value > available_cpus():
+        raise click.BadParameter(f"{value} is more than the {available_cpus()} CPUs this process "
+                                 f"may run on; allowed 1-{available_cpus()}", ctx, param)
+    return value
+
+
 OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None,
+                           callback=cpus_allowed,
                             help="Cores to use [default: the CPUs this process may run on, at "
                                  "most 4]. One FE run: element threads; a sweep or calibration: "
                                  "designs or skins at once. BLAS stays single-threaded.")
@@ -173,16 +207,16 @@ def parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
 
 
 def load_materials(path: str | None) -> dict[str, dict]:
+    from softhand.io import read_json
+
     if path is None:
         return {}
     if not str(path).strip():
         bad("--materials '': expected a JSON file path, got an empty string")
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        bad(f"--materials {path!r}: cannot be read ({exc.__class__.__name__}: {exc})")
-    except json.JSONDecodeError as exc:
-        bad(f"--materials {path!r}: not JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})")
+        data = read_json(path, name=f"--materials {path!r}")
+    except ValueError as exc:
+        bad(str(exc))
     if not isinstance(data, dict):
         bad(f"--materials {path!r}: expected an object keyed by material name (sil, pu), "
              f"got {type(data).__name__}")
@@ -266,19 +300,6 @@ def parse_sensors(items: tuple[str, ...], design: str, geometry: dict[str, float
     if len(set(names)) != len(names):
         bad(f"--sensor: the patches {names} are not distinct")
     return tuple(patches)
-
-
-def shipped_settings_differ(out: Path, settings) -> list[str]:
-    """Settings of ``settings`` that differ from those the folder's summary.json records."""
-    from dataclasses import asdict
-
-    path = out / "summary.json"
-    try:
-        old = json.loads(path.read_text(encoding="utf-8"))["provenance"]["settings"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return []
-    new = json.loads(json.dumps(asdict(settings)))
-    return sorted(k for k in new if k != "threads" and k in old and old[k] != new[k])
 
 
 def parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:

@@ -1,7 +1,10 @@
 """Atomic file writing (a temp file in the target folder, then ``os.replace``), checks that a
-path can be written before any work starts, and a block that Ctrl-C cannot cut in half.
+path can be written before any work starts (and that its disk has room), a folder written beside
+its target and swapped in only when complete, JSON input files read with one clear error, and a
+block that Ctrl-C cannot cut in half.
 
-An interrupted run leaves either the old file or the new one, never a partial file.
+An interrupted run leaves either the old file or the new one, never a partial file; a staged
+folder (:func:`staged_folder`) leaves either the old set or the new complete set.
 """
 
 from __future__ import annotations
@@ -9,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import signal
 import tempfile
 import threading
@@ -16,8 +20,12 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["atomic_open", "atomic_write_json", "atomic_write_text", "check_writable_dir",
-           "check_writable_file", "interrupts_deferred"]
+__all__ = ["Staged", "atomic_open", "atomic_write_json", "atomic_write_text", "check_free_space",
+           "check_writable_dir", "check_writable_file", "interrupts_deferred", "read_json",
+           "staged_folder"]
+
+#: Longest file or folder name (bytes) and path that Linux and macOS file systems take
+NAME_MAX, PATH_MAX = 255, 4096
 
 
 @contextlib.contextmanager
@@ -64,8 +72,11 @@ def _nearest_existing(path: Path) -> Path:
 def check_writable_dir(path: str | os.PathLike, *, name: str = "path") -> Path:
     """``path`` as a folder that can be written (created with its parents if missing).
 
-    Checked without writing anything: the path is not empty, is not a file, and it (or the
-    nearest folder above it that exists) is a writable folder.
+    Checked before any work, leaving nothing behind: the path is not empty, no name in it is
+    longer than the file system takes, it is not a file, and the nearest folder of it (or above
+    it) that exists takes a new file: a probe file is made and removed there, so that a
+    read-only mount or a folder that only looks writable (``os.access`` says yes to root
+    everywhere) is found now, not after the work.
 
     Raises:
         ValueError: naming ``name`` and the path.
@@ -73,15 +84,27 @@ def check_writable_dir(path: str | os.PathLike, *, name: str = "path") -> Path:
     text = os.fspath(path)
     if not text.strip():
         raise ValueError(f"{name} = {text!r}: expected a folder path, got an empty string")
+    shown = text if len(text) <= 80 else f"{text[:40]}...{text[-30:]}"
+    long = [part for part in Path(text).parts if len(os.fsencode(part)) > NAME_MAX]
+    if long or len(os.fsencode(text)) > PATH_MAX:
+        what = (f"the name {long[0][:30]!r}... has {len(os.fsencode(long[0]))} bytes" if long
+                else f"the path has {len(os.fsencode(text))} bytes")
+        raise ValueError(f"{name} = {shown!r}: {what}; allowed at most {NAME_MAX} bytes a name "
+                         f"and {PATH_MAX} a path")
     target = Path(text)
     if target.exists() and not target.is_dir():
-        raise ValueError(f"{name} = {text!r} is a file, not a folder")
+        raise ValueError(f"{name} = {shown!r} is a file, not a folder")
     base = _nearest_existing(target.resolve())
     if not base.is_dir():
-        raise ValueError(f"{name} = {text!r}: {str(base)!r} is a file, so no folder can be made "
+        raise ValueError(f"{name} = {shown!r}: {str(base)!r} is a file, so no folder can be made "
                          "below it")
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise ValueError(f"{name} = {text!r}: folder {str(base)!r} is not writable")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".softhand-probe-", dir=base)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise ValueError(f"{name} = {shown!r}: folder {str(base)!r} is not writable "
+                         f"({exc.strerror or exc})") from None
     return target
 
 
@@ -102,10 +125,119 @@ def check_writable_file(path: str | os.PathLike, *, suffix: str | None = None,
         raise ValueError(f"{name} = {text!r}: expected a file name ending in {suffix}")
     if target.is_dir():
         raise ValueError(f"{name} = {text!r} is a folder, not a file")
+    if target.exists() and not target.is_file():
+        raise ValueError(f"{name} = {text!r} is not a regular file (a device, a pipe or a "
+                         "socket): expected a file path")
     if target.exists() and not os.access(target, os.W_OK):
         raise ValueError(f"{name} = {text!r}: the file is not writable")
     check_writable_dir(target.parent if str(target.parent) else ".", name=name)
     return target
+
+
+def check_free_space(path: str | os.PathLike, need_bytes: float, *, name: str = "path") -> None:
+    """Refuse when the disk that would hold ``path`` has less than ``need_bytes`` free.
+
+    ``need_bytes`` is the caller's estimate of what the run writes (a recording, a sweep's
+    curves), checked before the work so that a full disk is found in a second, not at the end.
+
+    Raises:
+        ValueError: naming ``name``, the path, the bytes needed and the bytes free.
+    """
+    base = _nearest_existing(Path(os.fspath(path)).resolve())
+    free = shutil.disk_usage(base if base.is_dir() else base.parent).free
+    if free < need_bytes:
+        raise ValueError(f"{name} = {os.fspath(path)!r}: this run writes about "
+                         f"{_size(need_bytes)} and the disk of {str(base)!r} has "
+                         f"{_size(free)} free")
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB"):
+        if n < 1000 or unit == "GB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1000
+    raise AssertionError  # pragma: no cover
+
+
+def read_json(path: str | os.PathLike, *, name: str | None = None) -> Any:
+    """The JSON document of a regular file; every failure is one ValueError naming the file.
+
+    Not a regular file (``/dev/zero``, a folder, a pipe: reading them hangs or fails late),
+    unreadable, not UTF-8, not JSON, nested past what the parser takes, or holding NaN/Infinity
+    (not JSON; Python's parser would accept them) are refused.
+    """
+    target = Path(os.fspath(path))
+    label = name or str(target)
+    if not target.exists():
+        raise ValueError(f"{label}: no such file")
+    if not target.is_file():
+        raise ValueError(f"{label}: not a regular file (a folder, device or pipe)")
+
+    def no_constants(token: str):
+        raise ValueError(f"{token} is not a JSON number")
+
+    try:
+        return json.loads(target.read_text(encoding="utf-8"), parse_constant=no_constants)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{label}: cannot be read ({exc.__class__.__name__}: {exc})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{label}: not JSON (line {exc.lineno}, column {exc.colno}: "
+                         f"{exc.msg})") from None
+    except RecursionError:
+        raise ValueError(f"{label}: nested too deeply to be a softhand file") from None
+    except ValueError as exc:
+        raise ValueError(f"{label}: {exc}") from None
+
+
+class Staged:
+    """A folder to write a set into (see :func:`staged_folder`)."""
+
+    def __init__(self, target: Path, path: Path) -> None:
+        self.target, self.path, self.committed = target, path, False
+
+    def commit(self) -> None:
+        """Put the written set in place of the target (two renames, Ctrl-C held meanwhile)."""
+        if self.path == self.target:
+            self.committed = True
+            return
+        with interrupts_deferred():
+            old = None
+            if self.target.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.old-",
+                                            dir=self.target.parent))
+                os.rename(self.target, old / self.target.name)
+            os.rename(self.path, self.target)
+            self.committed = True
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def staged_folder(target: str | os.PathLike, *, stage: bool) -> Iterator[Staged]:
+    """A folder to write a whole set into, swapped in for ``target`` only on :meth:`Staged.commit`.
+
+    With ``stage`` (shipped data), the set is written into a copy of ``target`` made beside it;
+    ``commit()`` swaps the copy in; leaving the block without a commit (Ctrl-C, a failed design,
+    a disk that filled up) deletes the copy, so ``target`` keeps its old complete set byte for
+    byte. Without ``stage``, the block writes into ``target`` itself (what finished is kept).
+    """
+    target = Path(os.fspath(target))
+    if not stage:
+        target.mkdir(parents=True, exist_ok=True)
+        yield Staged(target, target)
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.new-", dir=target.parent))
+    path = holder / target.name
+    try:
+        if target.exists():
+            shutil.copytree(target, path, symlinks=True)
+        else:
+            path.mkdir()
+        staged = Staged(target, path)
+        yield staged
+    finally:
+        shutil.rmtree(holder, ignore_errors=True)
 
 
 @contextlib.contextmanager

@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from softhand.cli import main
-from softhand.paths import FE_DIR
+from softhand.paths import CALIBRATION_DIR, FE_DIR, SKINS_DIR
 
 FAST = ["--mode", "2d", "--hold", "0"]
 HAND = str(Path(__file__).resolve().parent / "data" / "menagerie_style_hand.xml")
@@ -99,16 +99,31 @@ def test_paths_that_cannot_be_written(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt"]
 
 
-def test_shipped_calibration_is_not_replaced_by_a_subset():
-    """Default --out is the shipped folder: a subset (or other settings) needs --force."""
-    before = {p: p.stat().st_mtime_ns for p in FE_DIR.glob("*")}
-    rejected(["fe", "sweep", "--design", "solid-pu"], "shipped calibration", "1 of the 12",
-             "--force")
-    rejected(["fe", "sweep", "--speed", "5"], "shipped calibration", "speed_mm_s", "--force")
-    rejected(["fe", "indent", "solid-pu", "--out", str(FE_DIR)], "shipped", "--force")
-    rejected(["calibrate", "pocket2-sil"], "shipped calibration", "1 of 14 skins", "--force")
-    rejected(["calibrate", "--representation", "rigid"], "shipped", "1 of 4 representations")
-    assert {p: p.stat().st_mtime_ns for p in FE_DIR.glob("*")} == before
+@pytest.mark.parametrize("args, needles", [
+    # the commands that make shipped data: only with --force, whatever the settings
+    (["fe", "sweep"], ["--out", "is the shipped calibration data", "--force"]),
+    (["fe", "sweep", "--design", "solid-pu"], ["shipped calibration data", "--force"]),
+    (["fe", "sweep", "--speed", "5"], ["shipped calibration data", "--force"]),
+    (["fe", "sweep", "--max-force", "20", "--max-depth", "7"], ["shipped", "--force"]),
+    (["fe", "indent", "solid-pu", "--out", str(FE_DIR)], ["shipped", "--force"]),
+    (["calibrate"], ["--out", "shipped calibration data", "--force"]),
+    (["calibrate", "pocket2-sil"], ["shipped calibration data", "--force"]),
+    (["sensors", "calibrate", "--fit-only"], ["--out", "shipped calibration data", "--force"]),
+    # the commands that never write shipped data: refused outright
+    (["fe", "sweep", "--out", str(SKINS_DIR)], ["--out", "shipped", "--force"]),
+    (["fe", "export", "solid-pu", str(FE_DIR / "x.inp")], ["OUT", "never writes"]),
+    (["handshake", "--record", str(CALIBRATION_DIR / "x.rrd")], ["--record", "never writes"]),
+    (["render", str(SKINS_DIR / "x.png")], ["OUT", "never writes"]),
+    (["bench", "handshake", "--out", str(FE_DIR)], ["--out", "never writes"]),
+    (["population", "--out", str(CALIBRATION_DIR / "pop")], ["--out", "never writes"]),
+    (["skin", "flex-press", "--picture", str(SKINS_DIR / "p.png")], ["--picture", "never writes"]),
+])
+def test_shipped_data_is_written_only_with_force(args, needles):
+    """Every command that can write refuses the shipped calibration/ without --force (issue 20,
+    item 2): nothing in calibration/ changes, not even a file's time."""
+    before = {p: p.stat().st_mtime_ns for p in CALIBRATION_DIR.rglob("*")}
+    rejected(args, *needles)
+    assert {p: p.stat().st_mtime_ns for p in CALIBRATION_DIR.rglob("*")} == before
 
 
 @pytest.mark.parametrize("content, needles", [

@@ -24,11 +24,12 @@ import numpy as np
 from softhand import __version__
 from softhand.fem.geometry import DESIGNS, parse_design
 from softhand.fem.solver import SOLVER_VERSION, IndentationResult, IndentationSettings, indent
-from softhand.io import atomic_open, atomic_write_json, atomic_write_text
+from softhand.io import atomic_open, atomic_write_json, atomic_write_text, read_json
 from softhand.paper import paper
 from softhand.parallel import BatchOutcome, check_threads, run_tasks
 
-__all__ = ["compare_with_paper", "curve_csv", "git_revision", "run_sweep", "write_results"]
+__all__ = ["compare_with_paper", "curve_csv", "folder_conflict", "git_revision", "read_summary",
+           "run_sweep", "write_results"]
 
 
 def git_revision() -> str:
@@ -133,30 +134,106 @@ def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | 
     return replace(out, results=results, missing=[n for n in designs if n in out.missing])
 
 
+def read_summary(folder: str | Path) -> dict[str, Any] | None:
+    """The ``summary.json`` of an FE folder, checked; None when the folder has none.
+
+    Raises:
+        ValueError: naming the file, when it is not JSON or not a summary that
+            :func:`write_results` wrote (no provenance settings, designs or curve hashes).
+    """
+    path = Path(folder) / "summary.json"
+    if not path.exists():
+        return None
+    data = read_json(path)
+    try:
+        ok = (isinstance(data["provenance"]["settings"], dict)
+              and isinstance(data["provenance"]["curve_sha256"], dict)
+              and isinstance(data["designs"], dict))
+    except (KeyError, TypeError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{path}: not an FE summary written by `softhand fe sweep` (expected "
+                         "provenance.settings, provenance.curve_sha256 and designs)")
+    return data
+
+
+def _settings_of(settings: IndentationSettings | dict[str, Any]) -> dict[str, Any]:
+    """The settings that make a curve what it is (threads do not), as JSON values."""
+    import json
+
+    data = settings if isinstance(settings, dict) else asdict(settings)
+    return {k: v for k, v in json.loads(json.dumps(data, default=str)).items() if k != "threads"}
+
+
+def folder_conflict(summary: dict[str, Any] | None, settings: IndentationSettings,
+                    designs: Iterable[str]) -> str | None:
+    """Why writing ``designs`` run with ``settings`` into the folder of ``summary`` would mix two
+    sets of curves (None: it would not).
+
+    A folder holds curves of one setting (2D or 3D, mesh, speed, force, hold, materials...):
+    adding designs with other settings is refused, naming each difference; replacing every
+    design the folder holds is not a mix.
+    """
+    if summary is None:
+        return None
+    old, new = _settings_of(summary["provenance"]["settings"]), _settings_of(settings)
+    diff = [f"{k} {old[k]!r} (the folder) vs {new[k]!r} (this run)" for k in sorted(new)
+            if k in old and old[k] != new[k]]
+    if not diff or set(summary["designs"]) <= set(designs):
+        return None
+    return "; ".join(diff)
+
+
 def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
                   *, plot: bool = True, missing: dict[str, str] | None = None) -> dict[str, Any]:
     """Write curves, the summary with provenance and the plot into ``out_dir`` (atomically).
+
+    A folder that already holds curves of the same settings is extended: its other designs stay
+    in the summary (their curves are not touched) and the plot shows every design; a folder of
+    other settings is refused (:func:`folder_conflict`) unless this run replaces all it holds.
 
     Args:
         results: the finished designs (at least one).
         plot: draw ``curves.png``; when False for an incomplete set (``missing``), an older
             ``curves.png`` is removed so that nothing in the folder disagrees with the summary.
         missing: designs asked for that have no result, with why (interrupted, failed); the
-            summary lists them under ``missing`` and has ``complete: false``.
+            summary lists those the folder has no curve of under ``missing``, with
+            ``complete: false``.
+
+    Raises:
+        ValueError: a corrupt summary.json in ``out_dir``, or curves of other settings there.
     """
     if not results:
         raise ValueError("no finished design to write")
     out = Path(out_dir)
-    summaries = {}
-    hashes = {}
+    first = next(iter(results.values()))
+    old = read_summary(out)
+    conflict = folder_conflict(old, first.settings, [*results, *(missing or {})])
+    if conflict:
+        raise ValueError(f"{out / 'summary.json'}: the folder holds curves of other settings "
+                         f"({conflict}); write them into another folder")
+    same = old is not None and (_settings_of(old["provenance"]["settings"])
+                                == _settings_of(first.settings))
+    keep = ({n: v for n, v in old["designs"].items()
+             if n not in results and (out / f"{n}.csv").is_file()} if same else {})
+    if old is not None and not same:  # a run of other settings replaces all the folder held
+        for name in old["designs"]:
+            if name not in results:
+                (out / f"{name}.csv").unlink(missing_ok=True)
+    summaries = {n: keep[n] for n in DESIGNS if n in keep}
+    hashes = {n: old["provenance"]["curve_sha256"].get(n) for n in summaries}
+    sizes = {n: old["provenance"].get("mesh_sizes", {}).get(n) for n in summaries}
     for name, r in results.items():
         text = curve_csv(r)
         atomic_write_text(out / f"{name}.csv", text)
         hashes[name] = hashlib.sha256(text.encode()).hexdigest()
+        sizes[name] = {"n_elements": r.n_elements, "n_dofs": r.n_dofs}
         summaries[name] = {k: v for k, v in r.summary().items()
                            if k not in ("time_s", "displacement_mm", "force_N",
                                         "contact_area_mm2")}
-    first = next(iter(results.values()))
+    order = [n for n in DESIGNS if n in summaries]
+    summaries = {n: summaries[n] for n in order}
+    missing = {n: why for n, why in (missing or {}).items() if n not in summaries}
     settings = asdict(first.settings)
     summary = {
         "provenance": {
@@ -166,23 +243,32 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
             "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "settings": settings,
             "mesh_spec": asdict(first.settings.mesh_spec),
-            "mesh_sizes": {n: {"n_elements": r.n_elements, "n_dofs": r.n_dofs}
-                           for n, r in results.items()},
-            "curve_sha256": hashes,
+            "mesh_sizes": {n: sizes[n] for n in order},
+            "curve_sha256": {n: hashes[n] for n in order},
             "paper": paper()["source"],
         },
         "complete": not missing,
-        "missing": dict(missing or {}),
+        "missing": missing,
         "designs": summaries,
         "comparison": compare_with_paper(summaries),
-        "total_wall_s": float(sum(r.wall_s for r in results.values())),
+        "total_wall_s": float(sum(v.get("wall_s", 0.0) for v in summaries.values())),
     }
     atomic_write_json(out / "summary.json", summary)
     if plot:
-        plot_curves(results, out / "curves.png")
-    elif missing:  # an interrupted set: no plot that would disagree with the summary
+        curves = {n: results[n] if n in results else _curve_of(out / f"{n}.csv") for n in order}
+        plot_curves(curves, out / "curves.png")
+    elif missing or keep:  # no plot that would disagree with the summary
         (out / "curves.png").unlink(missing_ok=True)
     return summary
+
+
+def _curve_of(path: Path):
+    """A curve CSV as the arrays :func:`plot_curves` draws."""
+    from types import SimpleNamespace
+
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return SimpleNamespace(time_s=data[:, 0], displacement_mm=data[:, 1], force_N=data[:, 2],
+                           hold=data[:, 3] > 0.5)
 
 
 def plot_curves(results: dict[str, IndentationResult], path: str | Path) -> None:

@@ -53,8 +53,8 @@ from softhand.skin.soft_contact import SoftContactParams
 from softhand.validate import check_mapping, check_number, join, show
 
 __all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
-           "calibrate_design", "calibrate_skin", "fe_curves", "fit_pad", "hold_error",
-           "law_curve", "loading_error", "posture_sensitivity", "skin_names",
+           "calibrate_design", "calibrate_skin", "check_fe_folders", "fe_curves", "fit_pad",
+           "hold_error", "law_curve", "loading_error", "posture_sensitivity", "skin_names",
            "social_touch_record"]
 
 FORMAT_VERSION = 2  # 2: FE curves and laws to 20 N, split errors, the pair law against tissue
@@ -63,41 +63,82 @@ MASS_FACTORS = (0.01, 100.0)
 PAD_CONTACT_FACTOR = 300.0  # pad contact stiffness / the skin's largest tangent stiffness
 
 
+#: The speed (mm/s) of each curve folder of an FE folder: fitted, fitted fast, validation
+FE_SPEED_FOLDERS = {".": 0.5, "speed-5": 5.0, "speed-2": 2.0}
+
+
 def fe_curves(design: str, fe_dir: str | Path) -> tuple[list[Curve], list[Curve]]:
     """FE curves to fit (0.5 mm/s, and 5 mm/s if present) and to validate on (2 mm/s).
 
     Each curve is checked against the sha256 that its folder's ``summary.json`` recorded when
-    ``softhand fe sweep`` wrote it (when the summary has one): a curve cut at a row boundary
-    parses as a shorter curve, but not with the recorded hash.
+    ``softhand fe sweep`` wrote it (when the folder has a summary): a curve cut at a row boundary
+    parses as a shorter curve, but not with the recorded hash. The folders' settings are checked
+    first (:func:`check_fe_folders`): curves of other settings are never mixed.
 
     Raises:
         FileNotFoundError: no 0.5 mm/s curve for ``design``.
-        ValueError: a malformed curve, or one whose hash differs from the recorded one.
+        ValueError: a malformed curve, one whose hash differs from the recorded one or that its
+            folder's summary does not record, a corrupt summary, or folders of other settings.
     """
     root = Path(fe_dir)
+    summaries = check_fe_folders(root)
     main = root / f"{design}.csv"
     if not main.exists():
         raise FileNotFoundError(f"no FE curve for {design!r} at {main}: run `softhand fe sweep`")
-    fit = [_recorded_curve(main, f"{design}@0.5mm/s")]
+    fit = [_recorded_curve(main, f"{design}@0.5mm/s", summaries["."])]
     fast = root / "speed-5" / f"{design}.csv"
     if fast.exists():
-        fit.append(_recorded_curve(fast, f"{design}@5mm/s"))
+        fit.append(_recorded_curve(fast, f"{design}@5mm/s", summaries["speed-5"]))
     val = root / "speed-2" / f"{design}.csv"
-    return fit, [_recorded_curve(val, f"{design}@2mm/s")] if val.exists() else []
+    return fit, ([_recorded_curve(val, f"{design}@2mm/s", summaries["speed-2"])]
+                 if val.exists() else [])
 
 
-def _recorded_curve(path: Path, label: str) -> Curve:
-    import json
+def check_fe_folders(root: str | Path) -> dict[str, dict | None]:
+    """The summaries of an FE folder and its ``speed-5``/``speed-2`` folders, checked to be of
+    one setting: each folder at its speed, and mode, mesh, force, hold, materials... the same.
 
+    Raises:
+        ValueError: naming the file, for a corrupt summary; naming both settings, for a mix.
+    """
+    from softhand.fem.sweep import read_summary
+
+    root = Path(root)
+    summaries = {sub: read_summary(root / sub) for sub in FE_SPEED_FOLDERS}
+    ref = None
+    for sub, data in summaries.items():
+        if data is None:
+            continue
+        settings = {k: v for k, v in data["provenance"]["settings"].items() if k != "threads"}
+        path = root / sub / "summary.json"
+        if settings.get("speed_mm_s") != FE_SPEED_FOLDERS[sub]:
+            raise ValueError(f"{path}: its curves were run at speed_mm_s = "
+                             f"{settings.get('speed_mm_s')!r}; this folder holds the "
+                             f"{FE_SPEED_FOLDERS[sub]:g} mm/s curves")
+        settings.pop("speed_mm_s")
+        if ref is None:
+            ref = (path, settings)
+            continue
+        diff = [f"{k} {ref[1][k]!r} ({ref[0]}) vs {settings[k]!r} ({path})"
+                for k in sorted(settings) if k in ref[1] and ref[1][k] != settings[k]]
+        if diff:
+            raise ValueError("FE curves of other settings in one folder: " + "; ".join(diff))
+    return summaries
+
+
+def _recorded_curve(path: Path, label: str, summary: dict | None) -> Curve:
     curve = load_curve(path, label)
-    try:
-        summary = json.loads((path.parent / "summary.json").read_text(encoding="utf-8"))
-        recorded = summary["provenance"]["curve_sha256"][path.stem]
-    except (OSError, ValueError, KeyError, TypeError):
-        return curve  # no record to compare with
+    if summary is None:
+        return curve  # hand-made curves: no record to compare with
+    recorded = summary["provenance"]["curve_sha256"].get(path.stem)
+    where = path.parent / "summary.json"
+    if recorded is None:
+        raise ValueError(f"{path}: {where} has no record of this curve (it lists "
+                         f"{', '.join(summary['provenance']['curve_sha256']) or 'none'}): the "
+                         "curve was not written by `softhand fe sweep` with that folder's settings")
     if recorded != curve.sha256:
         raise ValueError(f"{path}: its sha256 {curve.sha256[:12]}... differs from the "
-                         f"{recorded[:12]}... that {path.parent / 'summary.json'} recorded: the "
+                         f"{recorded[:12]}... that {where} recorded: the "
                          "file was changed or truncated after `softhand fe sweep` wrote it")
     return curve
 
