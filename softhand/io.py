@@ -163,8 +163,9 @@ def read_json(path: str | os.PathLike, *, name: str | None = None) -> Any:
     """The JSON document of a regular file; every failure is one ValueError naming the file.
 
     Not a regular file (``/dev/zero``, a folder, a pipe: reading them hangs or fails late),
-    unreadable, not UTF-8, not JSON, nested past what the parser takes, or holding NaN/Infinity
-    (not JSON; Python's parser would accept them) are refused.
+    unreadable, not UTF-8, not JSON, or nested past what the parser takes are refused. NaN and
+    Infinity parse (as Python's parser reads them) so that the file's validator names the key
+    that holds them.
     """
     target = Path(os.fspath(path))
     label = name or str(target)
@@ -172,12 +173,8 @@ def read_json(path: str | os.PathLike, *, name: str | None = None) -> Any:
         raise ValueError(f"{label}: no such file")
     if not target.is_file():
         raise ValueError(f"{label}: not a regular file (a folder, device or pipe)")
-
-    def no_constants(token: str):
-        raise ValueError(f"{token} is not a JSON number")
-
     try:
-        return json.loads(target.read_text(encoding="utf-8"), parse_constant=no_constants)
+        return json.loads(target.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"{label}: cannot be read ({exc.__class__.__name__}: {exc})") from None
     except json.JSONDecodeError as exc:
@@ -185,8 +182,6 @@ def read_json(path: str | os.PathLike, *, name: str | None = None) -> Any:
                          f"{exc.msg})") from None
     except RecursionError:
         raise ValueError(f"{label}: nested too deeply to be a softhand file") from None
-    except ValueError as exc:
-        raise ValueError(f"{label}: {exc}") from None
 
 
 class Staged:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import errno
 import hashlib
 import json
+import re
 import shutil
 from collections import namedtuple
 from dataclasses import replace
@@ -200,7 +201,7 @@ def test_names_longer_than_the_file_system_takes_are_refused(tmp_path):
 
 @pytest.mark.parametrize("content, needle", [
     ("[" * 100000 + "]" * 100000, "nested too deeply"),
-    ('{"sil": {"nu": NaN}}', "NaN is not a JSON number"),
+    ('{"sil": {"nu": NaN}}', "sil.nu = nan: expected a finite number"),
 ])
 def test_json_inputs_that_would_break_the_parser(tmp_path, content, needle):
     path = tmp_path / "m.json"
@@ -228,3 +229,34 @@ def test_an_unknown_gl_backend_is_refused_before_the_run(monkeypatch, tmp_path):
     monkeypatch.setenv("MUJOCO_GL", "bogus")
     res = invoke(["render", str(tmp_path / "x.png")])
     assert res.exit_code == 2 and "MUJOCO_GL = 'bogus'" in res.output and "osmesa" in res.output
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda d: d["laws"]["pocket2-sil"]["interface"]["kernel"].update(k_inf=0.5),
+     "laws.pocket2-sil.interface.kernel.k_inf = 0.5: it is 1 - sum(c)"),
+    (lambda d: d["laws"]["pocket2-sil"]["interface"].update(gain=2.0),
+     "laws.pocket2-sil.interface.gain"),
+    (lambda d: d.update(extra=1), "extra"),
+    (lambda d: d["laws"]["pocket2-sil"]["interface"]["fitted"][0].pop("rms_pct"),
+     "fitted[0].rms_pct: missing"),
+])
+def test_transfer_files_with_unknown_or_inconsistent_keys_are_refused(tmp_path, edit, needle):
+    from softhand.sensors.calibrate import load_transfer_laws
+
+    data = json.loads((CALIBRATION_DIR / "sensors" / "transfer.json").read_text())
+    edit(data)
+    path = tmp_path / "transfer.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=r"transfer\.json") as info:
+        load_transfer_laws(path)
+    assert needle in str(info.value)
+
+
+def test_nan_in_a_transfer_file_is_refused(tmp_path):
+    from softhand.sensors.calibrate import load_transfer_laws
+
+    text = (CALIBRATION_DIR / "sensors" / "transfer.json").read_text()
+    path = tmp_path / "transfer.json"
+    path.write_text(re.sub(r'"dead_band_N": [-0-9.e]+', '"dead_band_N": NaN', text, count=1))
+    with pytest.raises(ValueError, match=r"dead_band_N = nan: expected a finite number"):
+        load_transfer_laws(path)

@@ -128,13 +128,17 @@ def fit_all(designs: list[str], root: str | Path) -> dict[str, Any]:
 
 def load_transfer_laws(path: str | Path) -> dict[tuple[str, str], TransferLaw]:
     """Every law of a ``transfer.json``, keyed (design, placement); ValueError names the key."""
+    from softhand.io import read_json
+
     p = Path(path)
+    data = read_json(p)
+    from softhand.validate import check_mapping
+
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{p}: cannot read the transfer laws ({exc})") from None
-    if not isinstance(data, dict) or not isinstance(data.get("laws"), dict):
-        raise ValueError(f"{p}: expected an object with 'laws'")
+        check_mapping("", data, required=("provenance", "laws"))
+        check_mapping("laws", data["laws"], optional=None)
+    except ValueError as exc:
+        raise ValueError(f"{p}: {exc}") from None
     out = {}
     for design, per in data["laws"].items():
         if not isinstance(per, dict):

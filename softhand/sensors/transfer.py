@@ -296,18 +296,27 @@ class TransferLaw:
             kernel = ShareKernel(tuple(kern["c"]), tuple(kern["tau_s"]))
         except (TypeError, ValueError) as exc:
             raise ValueError(f"{join(key, 'kernel')}: {exc}") from None
+        if "k_inf" in kern:  # written for the reader; derived from c, so it must agree
+            k = check_number(join(join(key, "kernel"), "k_inf"), kern["k_inf"])
+            if abs(k - kernel.k_inf) > 1e-9:
+                raise ValueError(f"{join(join(key, 'kernel'), 'k_inf')} = {show(k)}: it is "
+                                 f"1 - sum(c) = {kernel.k_inf!r}; correct or remove it")
         errors = {}
         for part in ("fitted", "validated"):
             items = d.get(part, [])
             if not isinstance(items, list):
                 raise ValueError(f"{join(key, part)} = {show(items)}: expected a list")
-            errors[part] = tuple(
-                TransferError(str(e.get("label", "")), float(e["rms_pct"]),
-                              float(e["ramp_max_pct"]),
-                              None if e.get("hold_max_pct") is None else float(e["hold_max_pct"]),
-                              None if e.get("to_2N_rms_pct") is None
-                              else float(e["to_2N_rms_pct"]))
-                for e in items)
+            rows = []
+            for i, e in enumerate(items):
+                at = f"{join(key, part)}[{i}]"
+                check_mapping(at, e, required=("rms_pct", "ramp_max_pct"),
+                              optional=("label", "hold_max_pct", "to_2N_rms_pct"))
+                num = {f: None if e.get(f) is None else check_number(join(at, f), e[f], lo=0.0)
+                       for f in ("rms_pct", "ramp_max_pct", "hold_max_pct", "to_2N_rms_pct")}
+                rows.append(TransferError(str(e.get("label", "")), num["rms_pct"],
+                                          num["ramp_max_pct"], num["hold_max_pct"],
+                                          num["to_2N_rms_pct"]))
+            errors[part] = tuple(rows)
         return cls(d["design"], d["placement"],
                    check_number(join(key, "area_mm2"), d["area_mm2"], lo=0.0, lo_open=True),
                    check_number(join(key, "dead_band_N"), d["dead_band_N"], lo=0.0),

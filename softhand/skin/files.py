@@ -7,10 +7,9 @@ versions); ``index.json`` holds the summary table and the lifelike ranking.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from softhand.io import atomic_write_json
+from softhand.io import atomic_write_json, read_json
 from softhand.paths import FE_DIR, SKINS_DIR
 from softhand.skin.calibrate import SkinCalibration
 
@@ -43,11 +42,7 @@ def load_calibration(design: str, directory: str | Path = SKINS_DIR, *,
         known = ", ".join(shipped_skins(directory)) or "none"
         raise ValueError(f"no calibration for skin {design!r} in {directory} (calibrated: {known});"
                          " run `softhand calibrate`")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: skin {design}: not a readable calibration file ({exc})"
-                         ) from None
+    data = read_json(path, name=f"{path}: skin {design}: not a readable calibration file")
     if not isinstance(data, dict):
         raise ValueError(f"{path}: skin {design}: not a calibration file (top level is "
                          f"{type(data).__name__}, expected an object)")
