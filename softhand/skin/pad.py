@@ -8,9 +8,12 @@ a C2 cubic spline written as a truncated power series
 
     F(x) = a x + b x^2 + c x^3 + \sum_k c_k (x - t_k)_+^3 \; - \;[\text{quadratic and cubic past } t_n]
 
-that MuJoCo evaluates natively: the joint's polynomial ``stiffness`` holds the first piece, and one
-fixed tendon per knot with a dead-band ``springlength = (-inf, t_k)`` and polynomial stiffness holds
-each further piece (the last one cancels the curvature, so the law continues as a straight line).
+that MuJoCo evaluates natively: one fixed tendon per piece with a dead-band ``springlength =
+(-inf, t_k)`` and polynomial stiffness (the last one cancels the curvature, so the law continues as
+a straight line). The first piece too (:math:`t_0 = 0`): the law acts in compression only. On the
+joint, MuJoCo's polynomial :math:`-(a x + b x^2 + c x^3)` would act on both sides, and with
+:math:`b > 0` it is not restoring for :math:`x < 0` (pocket2-sil: negative stiffness below
+-0.79 mm, pushing outward below -1.46 mm): a pad pushed past its rest from behind ran away.
 
 Relaxation: QLV needs, per Prony term, a hereditary force :math:`h_i` with
 :math:`\dot h_i = g_i F_e'(x)\dot x - h_i/\tau_i`. Write :math:`F_e` as a piecewise-linear
@@ -67,11 +70,12 @@ def spline_pieces(law: ElasticLaw, scale: float = 1.0) -> list[tuple[float, floa
 
 
 def evaluate_pieces(pieces: list[tuple[float, float, float, float]], x_m) -> np.ndarray:
-    """The force (N) of :func:`spline_pieces` at compression ``x_m`` (m), as MuJoCo computes it."""
+    """The force (N) of :func:`spline_pieces` at compression ``x_m`` (m), as MuJoCo computes it
+    (the pad's tendons: nothing below each knot, so nothing at ``x < 0``)."""
     x = np.asarray(x_m, dtype=float)
     out = np.zeros_like(x)
     for t0, a, b, c in pieces:
-        u = np.maximum(x - t0, 0.0) if t0 > 0 else x
+        u = np.maximum(x - t0, 0.0)
         out = out + a * u + b * u**2 + c * u**3
     return out
 
@@ -177,18 +181,17 @@ class PadParams:
 
 
 def _spring(spec: mujoco.MjSpec, name: str, joint: str, other: str | None,
-            pieces: list[tuple[float, float, float, float]], first_on_joint: mujoco.MjsJoint | None
-            ) -> None:
-    """Add the spline as joint polynomial stiffness (first piece) and dead-band tendons."""
+            pieces: list[tuple[float, float, float, float]]) -> None:
+    """Add the pieces as dead-band tendons: ``joint`` (minus ``other``, a branch) past each
+    knot. The pad's own spring acts in compression only (a dead band below 0 too); a branch's
+    first piece, linear, acts on both sides."""
     for k, (t, a, b, c) in enumerate(pieces):
-        if k == 0 and first_on_joint is not None:
-            first_on_joint.stiffness = [a, b, c]
-            continue
         ten = spec.add_tendon(name=f"{name}_k{k}")
         ten.wrap_joint(joint, 1.0)
         if other is not None:
             ten.wrap_joint(other, -1.0)
-        ten.springlength = [0.0, 0.0] if t == 0.0 else [-FAR_M, t]  # dead band below knots
+        linear_branch = other is not None and t == 0.0
+        ten.springlength = [0.0, 0.0] if linear_branch else [-FAR_M, t]  # dead band below knots
         ten.stiffness = [a, b, c]
 
 
@@ -211,7 +214,7 @@ def add_pad(spec: mujoco.MjSpec, bone: mujoco.MjsBody, name: str, params: PadPar
     pad.inertia = [1e-9, 1e-9, 1e-9]
     pad.ipos = [0.0, 0.0, 0.0]  # a defined ipos makes the MJCF writer keep the <inertial>
     pad.explicitinertial = True
-    _spring(spec, f"{name}_eq", joint.name, None, spline_pieces(spring, law.prony.g_inf), joint)
+    _spring(spec, f"{name}_eq", joint.name, None, spline_pieces(spring, law.prony.g_inf))
     knots, slopes = params.branch_knots()
     for i, (g, tau, scale) in enumerate(zip(law.prony.g, law.prony.tau_s, params.damping_scale,
                                             strict=True)):
@@ -227,5 +230,5 @@ def add_pad(spec: mujoco.MjSpec, bone: mujoco.MjsBody, name: str, params: PadPar
             branch.inertia = [1e-9, 1e-9, 1e-9]
             branch.ipos = [0.0, 0.0, 0.0]
             branch.explicitinertial = True
-            _spring(spec, f"{name}_b{i}_{j}", joint.name, bj.name, [(t, g * k, 0.0, 0.0)], None)
+            _spring(spec, f"{name}_b{i}_{j}", joint.name, bj.name, [(t, g * k, 0.0, 0.0)])
     return pad

@@ -111,7 +111,17 @@ class HandPad:
             branch dofs per skin geom). 6, as in the rig: with 3 the pocket's stiffening is
             poorly split among the branches (pocket2-pu: 20 % of the held force off the law
             instead of 3.6 %, and a third of its relaxation).
-        max_compression_m: the pad's joint limit, the skin's thickness over the bone.
+        max_compression_m: the pad's joint limit, the skin's thickness over the bone. Both
+            ends of the pad's range (its rest and the bone) are MuJoCo's stiffest limit the
+            timestep resolves (solref time constant 2 timesteps, critically damped): with
+            MuJoCo's default (20 ms) a 3.7 N push from behind drove a 15 g pad 3 mm past its
+            rest.
+
+    The pad's spring is integrated explicitly (``implicitfast`` is implicit in velocity only,
+    and the pad dof has no damping; its branches lock on a step's time scale, so it feels the
+    law's instantaneous stiffness): the pad is stable while omega h < 2, omega = sqrt(K / m),
+    K the law's stiffness and m the pad's 5 g plus the armature. :meth:`max_timestep_s` gives
+    the largest timestep for a law up to a force.
     """
 
     armature_kg: float = 0.01
@@ -122,6 +132,34 @@ class HandPad:
         check_number("armature_kg", self.armature_kg, lo=0.0, lo_open=True, hi=1.0)
         check_number("n_knots", self.n_knots, lo=1, hi=50, integer=True)
         check_number("max_compression_m", self.max_compression_m, lo=0.0, lo_open=True, hi=0.05)
+
+    def max_timestep_s(self, law: SkinLaw, force_N: float) -> tuple[float, float, float, float]:
+        """The largest timestep (s) at which a hand pad of ``law`` is stable up to ``force_N``,
+        with the numbers behind it: the law's stiffest point up to that force (N/m), its
+        compression there (mm) and the pad's moving mass (kg): ``h = 2 sqrt(m / K)``.
+
+        Measured on one pocket2-sil pad pressed through human tissue to 7 N (a 1 kg mount,
+        tests/test_divergence.py): its force holds to 1 % up to 2.9 ms, oscillates off the law
+        from 3.05 ms and ends stuck at 33 N at 3.3 ms, without a MuJoCo warning (this bound:
+        2.65 ms; the tissue in series softens the pad a little).
+        """
+        e = law.elastic
+        top = min(float(force_N), float(e.force(e.max_mm)))
+        x = np.linspace(0.0, float(e.displacement_at(top)), 400)
+        k = float(np.max(e.stiffness(x))) * 1e3  # N/mm -> N/m
+        mass = hand_pad_params(law, self).pad_mass_kg + self.armature_kg
+        return 2.0 * float(np.sqrt(mass / k)), k, float(x[-1]), mass
+
+    def max_stable_force(self, law: SkinLaw, timestep_s: float) -> tuple[float, float]:
+        """The largest force (N) up to which a hand pad of ``law`` is stable at ``timestep_s``
+        (inf: everywhere), and the stiffness it may reach there, ``K = 4 m / h^2`` (N/m); the
+        inverse of :meth:`max_timestep_s`."""
+        e = law.elastic
+        mass = hand_pad_params(law, self).pad_mass_kg + self.armature_kg
+        k_max = 4.0 * mass / float(timestep_s) ** 2
+        x = np.linspace(0.0, e.max_mm, 2000)
+        over = np.flatnonzero(e.stiffness(x) * 1e3 > k_max)
+        return (float(e.force(x[over[0]])) if over.size else float("inf")), k_max
 
 
 class Representation(ABC):
@@ -355,7 +393,9 @@ def add_hand_pad(spec: mujoco.MjSpec, geom: str, law: SkinLaw, *,
         raise ValueError(f"outward = {outward!r}: expected a non-zero direction")
     body = g.parent
     pad = add_pad(spec, body, geom, hand_pad_params(law, settings), normal=tuple(n))
-    spec.joint(f"{geom}_pad").armature = settings.armature_kg
+    joint = spec.joint(f"{geom}_pad")
+    joint.armature = settings.armature_kg
+    joint.solref_limit = [2.0 * spec.option.timestep, 1.0]  # rest and bone: stiff stops
     copy = {a: getattr(g, a) for a in ("type", "size", "pos", "quat", "fromto", "meshname",
                                        "rgba", "contype", "conaffinity", "group", "condim",
                                        "friction", "margin", "gap", "priority", "solmix")}
