@@ -22,16 +22,21 @@ Every argument and input file is checked before any work starts. Exit status:
 1  internal error (one line; ``SOFTHAND_TRACEBACK=1`` shows the traceback)
 2  bad input: one line ``error: ...`` naming the flag (or file, skin and key), the value and
    the allowed range; nothing computed, nothing written
-3  an FE run or a calibration did not converge (what finished is written)
+3  an FE run or a calibration did not converge, or a handshake diverged (what finished is
+   written)
+4  an output could not be written during the run (a full disk): one line saying what was kept
 130 interrupted by Ctrl-C or SIGTERM: what had finished is written (atomically), nothing partial
 == ===================================================================================
 
-Default folders come from :mod:`softhand.paths` (the same for every command). Writing into the
-shipped ``calibration/`` needs the full set of designs or skins, or ``--force``.
+Default folders come from :mod:`softhand.paths` (the same for every command). Only ``fe sweep``,
+``fe indent --out``, ``calibrate`` and ``sensors calibrate`` write into the shipped
+``calibration/``, and only with ``--force``: the new set goes into a copy beside it that replaces
+it only when the run completes (:func:`softhand.io.staged_folder`).
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import signal
@@ -86,7 +91,8 @@ class _Softhand(click.Group):
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         try:
-            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+            with _warnings_summarised():  # each kind once, with its count, at the end
+                rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:
             click.echo(exc.format_message())
             sys.exit(0)
@@ -105,10 +111,19 @@ class _Softhand(click.Group):
                 _interrupted()
             if os.environ.get("SOFTHAND_TRACEBACK"):
                 raise
+            if isinstance(exc, OSError) and exc.errno in _WRITE_ERRNOS:
+                where = f" {exc.filename}" if exc.filename else ""
+                click.echo(f"error: could not write{where} ({exc.strerror}); the files written "
+                           "before it are kept, each whole (atomic writes)", err=True)
+                sys.exit(EXIT_WRITE)
             click.echo(f"internal error: {type(exc).__name__}: {exc} "
                        "(SOFTHAND_TRACEBACK=1 shows where)", err=True)
             sys.exit(1)
         sys.exit(rv if isinstance(rv, int) else 0)
+
+
+#: A write that failed for the disk or the file system, not for a bug: exit 4, one line
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.EACCES, errno.EPERM}
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:
@@ -151,6 +166,27 @@ def _terminated(signum, frame) -> NoReturn:
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     """A warning as the command line shows it: one line, its class and message, no source."""
     return f"warning ({category.__name__}): {message}\n"
+
+
+@contextmanager
+def _warnings_summarised() -> Iterator[None]:
+    """Collect the command's warnings (under the filters in force: ``-W`` and
+    ``PYTHONWARNINGS`` still apply, ``error`` included) and print each kind once when it ends,
+    however it ends: ``warning (Kind): message``, or ``warning (Kind) xN: first message (and N-1
+    more like it)``. Warnings from worker processes come back to this process
+    (softhand.parallel.run_tasks) and are counted here too."""
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            yield
+        finally:
+            kinds: dict[str, list[str]] = {}
+            for w in caught:
+                kinds.setdefault(w.category.__name__, []).append(str(w.message))
+            for name, texts in kinds.items():  # _one_line_warning's format, with the count
+                n = len(texts)
+                more = f" (and {n - 1} more like it)" if n > 1 else ""
+                click.echo(f"warning ({name}){f' x{n}' if n > 1 else ''}: {texts[0]}{more}",
+                           err=True)
 
 
 @main.group()
@@ -574,6 +610,7 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
               **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.physics import DivergenceError
     from softhand.envs.run import OVER_N, run_handshake
 
     if design is not None and not design.strip():
@@ -600,8 +637,12 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
             bad(sensor_flag_message(msg) if "placement" not in msg
                 else f"--sensor-placement: {msg}")
         bad(f"--representation / --skin: {exc}" if "representation" in msg else msg)
-    run = run_handshake(controller=controller, seed=seed, env=env, signal=signal,
-                        controller_settings=settings)
+    try:
+        run = run_handshake(controller=controller, seed=seed, env=env, signal=signal,
+                            controller_settings=settings)
+    except DivergenceError as exc:  # one line, exit 3: the numerical failure and what to try
+        raise Stopped(f"error: {exc.summary}; try a smaller --timestep (e.g. "
+                      f"{exc.suggested_timestep_s:g})", EXIT_CONVERGENCE) from None
     if record is not None:
         from softhand.bench.handshake import frames_of
         from softhand.viz import record_handshake
@@ -824,6 +865,7 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     """
     _check_gl()
     from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.physics import DivergenceError
     from softhand.envs.run import run_handshake
     from softhand.viz.render import CameraView, SheetFrame, render_sheet, render_state
 
@@ -836,7 +878,12 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         env = HandshakeEnv(design=design, partner_size=size_mm, hand=hand)
     except ValueError as exc:
         bad(str(exc))
-    run = run_handshake(controller=controller, seed=seed, env=env)
+    try:
+        run = run_handshake(controller=controller, seed=seed, env=env)
+    except DivergenceError as exc:  # one line, exit 3 (render runs at the default timestep)
+        raise Stopped(f"error: {exc.summary}; softhand handshake --timestep "
+                      f"{exc.suggested_timestep_s:g} tries a smaller one", EXIT_CONVERGENCE
+                      ) from None
     if sheet:
         grip = [i for i, p in enumerate(run.phase) if p == "grip"]
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]

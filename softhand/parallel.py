@@ -21,7 +21,9 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
+import pickle
 import signal
+import warnings
 from collections.abc import Callable, Hashable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -105,12 +107,34 @@ def _init_worker() -> None:
     threadpool_limits(1)
 
 
-def _call(job: tuple[Callable, Hashable, tuple]) -> tuple[Hashable, bool, Any]:
+def _call(job: tuple[Callable, Hashable, tuple]) -> tuple[Hashable, bool, Any, list[tuple]]:
+    """Run one task in a worker; its warnings (under the worker's filters) go back with it."""
     fn, key, args = job
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            out = key, True, fn(*args)
+        except Exception as exc:  # sent back as text: not every exception pickles
+            out = key, False, (type(exc).__name__, str(exc))
+    return (*out, [_portable(w) for w in caught])
+
+
+def _portable(w: warnings.WarningMessage) -> tuple[type[Warning], str, str, int]:
+    """A recorded warning as (category, text, filename, line) that pickles: a category that does
+    not pickle by reference (defined in a function) travels as UserWarning, its name in the text."""
+    text, category = str(w.message), w.category
     try:
-        return key, True, fn(*args)
-    except Exception as exc:  # sent back as text: not every exception pickles
-        return key, False, (type(exc).__name__, str(exc))
+        pickle.dumps(category)
+    except Exception:
+        text, category = f"{category.__name__}: {text}", UserWarning
+    return category, text, w.filename, w.lineno
+
+
+def _reissue(caught: list[tuple], registry: dict) -> None:
+    """Raise a worker's warnings again in this process, at their own file and line, under this
+    process's filters; ``registry`` is the batch's, so that the same warning from several workers
+    shows once under the ``default`` action, as it would from one process."""
+    for category, text, filename, lineno in caught:
+        warnings.warn_explicit(text, category, filename, lineno, registry=registry)
 
 
 def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple[Hashable, tuple]], *,
@@ -124,6 +148,11 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple[Hashable, tuple]], *
         threads: worker processes (None: :func:`default_threads`); 1 runs in this process (BLAS
             single-threaded, Ctrl-C interrupts the running task).
         on_done: called in the main process with (key, succeeded) after each task.
+
+    Warnings raised by a task in a worker are sent back with its result and raised again in
+    this process (at their own file and line, under this process's filters, each distinct one
+    once per batch under the ``default`` action), so that the caller sees and may record them as
+    if the task had run here.
 
     Returns:
         The outcome; a failed task does not stop the others.
@@ -146,10 +175,12 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple[Hashable, tuple]], *
             interrupted = True
     else:
         pool = None
+        registry: dict = {}  # the batch's record of warnings shown (_reissue)
         try:
             pool = multiprocessing.get_context("spawn").Pool(jobs, initializer=_init_worker)
-            for key, ok, value in pool.imap_unordered(
+            for key, ok, value, caught in pool.imap_unordered(
                     _call, [(fn, key, args) for key, args in tasks], chunksize=1):
+                _reissue(caught, registry)
                 if ok:
                     results[key] = value
                 else:

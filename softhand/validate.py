@@ -12,13 +12,14 @@ may use it.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
-__all__ = ["check_keys", "check_mapping", "check_number", "check_numbers", "join", "range_text",
-           "show"]
+__all__ = ["check_keys", "check_mapping", "check_number", "check_numbers", "check_path", "join",
+           "range_text", "show"]
 
 _MAX_SHOWN = 80  # characters of a value's repr quoted in a message
 
@@ -146,6 +147,23 @@ def check_mapping(key: str, value: Any, *, required: Iterable[str] = (),
     for name in required:
         if name not in value:
             raise ValueError(f"{join(key, name)}: missing (required: {', '.join(required)})")
+    return value
+
+
+def check_path(key: str, value: Any, *, what: str = "folder") -> str:
+    """Return ``value`` as a string if it is a path (a ``str`` or ``os.PathLike``) that is not
+    empty or blank, else raise; whether it exists is the reader's to say.
+
+    Raises:
+        ValueError: ``"{key} = '': expected a {what} path, got an empty string"`` or
+            ``"{key} = 5: expected a {what} path (a str or os.PathLike)"``.
+    """
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if not isinstance(value, str):
+        raise ValueError(f"{key} = {show(value)}: expected a {what} path (a str or os.PathLike)")
+    if not value.strip():
+        raise ValueError(f"{key} = {show(value)}: expected a {what} path, got an empty string")
     return value
 
 

@@ -260,3 +260,17 @@ def test_nan_in_a_transfer_file_is_refused(tmp_path):
     path.write_text(re.sub(r'"dead_band_N": [-0-9.e]+', '"dead_band_N": NaN', text, count=1))
     with pytest.raises(ValueError, match=r"dead_band_N = nan: expected a finite number"):
         load_transfer_laws(path)
+
+
+def test_any_command_that_meets_a_full_disk_says_so_in_one_line(tmp_path, monkeypatch):
+    import softhand.fem.abaqus
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "deck.inp"))
+
+    monkeypatch.setattr(softhand.fem.abaqus, "write_deck", full)
+    res = invoke(["fe", "export", "solid-pu", str(tmp_path / "deck.inp"), "--depth", "1"])
+    assert res.exit_code == 4, res.output
+    assert res.output.strip() == (f"error: could not write {tmp_path / 'deck.inp'} (No space left "
+                                  "on device); the files written before it are kept, each whole "
+                                  "(atomic writes)")

@@ -174,8 +174,8 @@ def run_case(checkout: Path, args: list[str]) -> dict:
 def outcome(r: dict) -> str:
     if r["rc"] is None:
         what = f"still working after {LIMIT_S:.0f} s (the work started)"
-    elif r["traceback"]:
-        what = f"traceback, exit {r['rc']}"
+    elif r["traceback"]:  # an API case (python -c): the exception the caller gets
+        what = "raises"
     else:
         what = f"exit {r['rc']} in {r['wall_s']:g} s"
     if r["calibration_changed"]:

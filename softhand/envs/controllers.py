@@ -23,9 +23,11 @@ latency, noise, threshold and quantization, and nothing inside a pocket's dead b
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
+
+from softhand.validate import check_number
 
 __all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClose",
            "make_controller"]
@@ -34,8 +36,19 @@ __all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClos
 SIGNALS = {"contact": "region_forces_N", "sensor": "sensor_load_estimate_N"}
 
 
+#: Allowed ranges of the controllers' settings (closed unless marked open), with why:
+#: a speed is a fraction of the motors' maximum; the longest episode is 6 s (reset option
+#: duration_s); a force target or touch threshold lies between the 0.05 N at which a region
+#: counts as touched and the 20 N the pair laws are fitted to; at a gain of 10 per N a 0.1 N
+#: error already commands full speed (a larger gain only makes the loop bang-bang).
+SPEED_RANGE = (0.0, 1.0)  # open at 0
+CLOSE_S_RANGE = (0.0, 6.0)  # open at 0
+FORCE_RANGE_N = (0.05, 20.0)
+GAIN_RANGE_PER_N = (0.0, 10.0)  # open at 0
+
+
 def _check_signal(signal: str) -> None:
-    if signal not in SIGNALS:
+    if not isinstance(signal, str) or signal not in SIGNALS:
         raise ValueError(f"signal = {signal!r} is unknown; allowed: {', '.join(SIGNALS)}")
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
@@ -61,16 +74,17 @@ class OpenLoopClose:
     far enough for the index and middle fingers to wrap the partner's hand, as the force
     controller's fingers do at 38-51 deg; a digit that meets the partner before then drives on
     into it until the command stops (up to its stall torque), which is what an open loop does
-    (0.35 s, the earlier default, stopped every finger 19 deg in, short of the partner)."""
+    (0.35 s, the earlier default, stopped every finger 19 deg in, short of the partner).
+
+    Settings: ``speed`` in (0, 1], ``close_s`` in (0, 6] s (:data:`CLOSE_S_RANGE`)."""
 
     speed: float = 0.6
     close_s: float = 0.8
 
     def __post_init__(self) -> None:
-        if not 0 < self.speed <= 1:
-            raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
-        if not self.close_s > 0:
-            raise ValueError(f"close_s = {self.close_s!r} must be > 0 s")
+        check_number("speed", self.speed, lo=SPEED_RANGE[0], hi=SPEED_RANGE[1], lo_open=True)
+        check_number("close_s", self.close_s, lo=CLOSE_S_RANGE[0], hi=CLOSE_S_RANGE[1],
+                     lo_open=True, why="s")
         self._start: float | None = None
 
     def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
@@ -88,7 +102,10 @@ class OpenLoopClose:
 
 @dataclass
 class ForceRegulating:
-    """Hold ``target_N`` on each digit's most loaded region with a proportional speed command."""
+    """Hold ``target_N`` on each digit's most loaded region with a proportional speed command.
+
+    Settings: ``target_N`` in [0.05, 20] N, ``gain_per_N`` in (0, 10] per N, ``signal``
+    ``contact`` or ``sensor`` (module constants: the ranges and why)."""
 
     target_N: float = 2.5
     gain_per_N: float = 0.5
@@ -96,10 +113,10 @@ class ForceRegulating:
 
     def __post_init__(self) -> None:
         _check_signal(self.signal)
-        if not self.target_N > 0:
-            raise ValueError(f"target_N = {self.target_N!r} must be > 0")
-        if not self.gain_per_N > 0:
-            raise ValueError(f"gain_per_N = {self.gain_per_N!r} must be > 0")
+        check_number("target_N", self.target_N, lo=FORCE_RANGE_N[0], hi=FORCE_RANGE_N[1],
+                     why="N")
+        check_number("gain_per_N", self.gain_per_N, lo=GAIN_RANGE_PER_N[0],
+                     hi=GAIN_RANGE_PER_N[1], lo_open=True, why="per N")
 
     def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
         a = np.zeros(6)
@@ -119,7 +136,10 @@ class ForceRegulating:
 @dataclass
 class Neutral:
     """Close each digit at ``speed`` until its most loaded region (the thumb: its pad, Thumb2)
-    exceeds ``touch_N``, then hold; the thumb rotates to the grasp's rotation."""
+    exceeds ``touch_N``, then hold; the thumb rotates to the grasp's rotation.
+
+    Settings: ``speed`` in (0, 1], ``touch_N`` in [0.05, 20] N, ``signal`` ``contact`` or
+    ``sensor``."""
 
     speed: float = 0.5
     touch_N: float = 0.3
@@ -127,10 +147,9 @@ class Neutral:
 
     def __post_init__(self) -> None:
         _check_signal(self.signal)
-        if not 0 < self.speed <= 1:
-            raise ValueError(f"speed = {self.speed!r} must be in (0, 1]")
-        if not self.touch_N > 0:
-            raise ValueError(f"touch_N = {self.touch_N!r} must be > 0")
+        check_number("speed", self.speed, lo=SPEED_RANGE[0], hi=SPEED_RANGE[1], lo_open=True)
+        check_number("touch_N", self.touch_N, lo=FORCE_RANGE_N[0], hi=FORCE_RANGE_N[1],
+                     why="N")
         self._held = np.zeros(5, bool)
 
     def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
@@ -157,10 +176,19 @@ CONTROLLERS = {"neutral": Neutral, "open-loop": OpenLoopClose, "force": ForceReg
 
 def make_controller(name: str, signal: str = "contact", **settings):
     """``neutral``, ``open-loop`` or ``force``, fed ``signal`` (the feedback controllers; the open
-    loop reads nothing), with ``settings`` (e.g. ``target_N``) over the defaults."""
-    if name not in CONTROLLERS:
+    loop reads nothing), with ``settings`` (e.g. ``target_N``) over the defaults.
+
+    Raises:
+        ValueError: an unknown controller or signal, or a setting outside its range (each
+            class's docstring), naming it, the value and the range."""
+    if not isinstance(name, str) or name not in CONTROLLERS:
         raise ValueError(f"controller {name!r} is unknown; allowed: {', '.join(CONTROLLERS)}")
     _check_signal(signal)
+    allowed = [f.name for f in fields(CONTROLLERS[name]) if f.name != "signal"]
+    for key in settings:
+        if key not in allowed:
+            raise ValueError(f"controller {name!r}: setting {key!r} is unknown; allowed: "
+                             f"{', '.join(allowed)}")
     if name != "open-loop":
         settings["signal"] = signal
     return CONTROLLERS[name](**settings)

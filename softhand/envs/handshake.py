@@ -39,8 +39,8 @@ class HandshakeEnv(TwoHandTouchEnv):
     The prosthetic hand's whole envelope is skin (the 18 regions and
     the non-sensing thenar; :mod:`softhand.hands.envelope`), the partner's is one layer of tissue;
     every contact between them is a calibrated soft contact (the skin in series with human tissue,
-    fitted to 20 N, calibrated to 7 N: a contact above that raises a ``CalibratedRangeWarning``
-    once per pair and episode). Each region's reading is a contact sensor on its skin's contacts
+    fitted to 20 N, calibrated to 7 N: contacts above that are counted every step in ``info`` and
+    summarised once per episode, see Warnings below). Each region's reading is a contact sensor on its skin's contacts
     inside its sensor zone (the contact side; the rest is unsensed skin), plus its bone where it
     bottoms out there. The partner regulates the summed force its phalanges feel; its grip acts
     once per action step, its arm every step.
@@ -90,8 +90,15 @@ class HandshakeEnv(TwoHandTouchEnv):
     * ``overload`` = -w_overload sum_i max(0, F_i - overload_N)^2 at all times;
     * ``effort`` = -w_effort |a|^2.
 
-    Episode end: truncated when the handshake is over (3.63 s by default); terminated if the
-    simulation produces a non-finite state (then ``info["unstable"]`` is True).
+    Episode end: truncated when the handshake is over (3.63 s by default); terminated on the step
+    whose physics diverged: MuJoCo reset its simulation after a bad position, velocity or
+    acceleration (its time went back), raised another warning (full contact or constraint buffer,
+    bad control), or the state is not finite. ``info["unstable"]`` then names the cause, the time
+    of the last good state and the dof (e.g. ``MuJoCo reset the simulation after a bad
+    acceleration (mjWARN_BADQACC) in dof 133 (joint pro_skin_Little1_pad) at t = 1.328 s``; False
+    on every other step), ``info["time_s"]`` is that time, the observation is zeros, the reward
+    -100 and the forces those of the last good step. ``run_handshake`` raises
+    ``DivergenceError`` (softhand.envs.physics) with it; ``softhand handshake`` exits 3.
 
     Timestep: allowed 0.1-5 ms (``TIMESTEP_RANGE_S``); the skins are calibrated for 0.5-2 ms
     (their rest laws hold at every step in that range) and warn (``SkinRangeWarning``) outside it.
@@ -109,7 +116,21 @@ class HandshakeEnv(TwoHandTouchEnv):
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (the target of the
     partner's summed digit force: its sampled grip per phalanx times ``GRIP_PHALANGES``),
     ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
-    effort), ``grasp_thumb_rotation_rad`` (the solved grasp's prosthetic thumb rotation).
+    effort), ``grasp_thumb_rotation_rad`` (the solved grasp's prosthetic thumb rotation),
+    ``pairs_beyond_range_N`` (dict pair -> N: the contact pairs above their law's calibrated
+    range at this step; usually empty); on the episode's last step only,
+    ``beyond_range_summary`` (see Warnings).
+
+    Warnings: one ``CalibratedRangeWarning`` per episode that had contacts beyond their pair
+    law's calibrated range (or a bone bottoming out), issued on the step that ends it (truncated
+    or terminated), or by ``reset()`` or ``close()`` when they cut an episode short, and
+    attributed to the code that called it (through Gymnasium's wrappers too). It summarises
+    ``info["beyond_range_summary"]``: ``contact_steps`` (pair contacts beyond range summed over
+    the steps), ``pairs``, ``bone_steps`` (together with ``contact_steps``: the sum of
+    ``contacts_beyond_range``), the worst pair (largest force over its limit: ``worst_pair``,
+    ``worst_skin``, ``worst_force_N``, ``worst_limit_N``, ``worst_time_s``), ``steps`` and
+    ``time_s``. At construction, skin pairs outside their calibration (a timestep outside
+    0.5-2 ms) give one ``SkinRangeWarning``: per kind of problem, how many pairs and the worst.
 
     Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
     region, ``skins`` values ``DESIGN@REPRESENTATION`` for one):
@@ -120,7 +141,10 @@ class HandshakeEnv(TwoHandTouchEnv):
       outward normal, the QLV law's spline spring and Maxwell branches, joint armature 10 g,
       :class:`~softhand.skin.representations.HandPad`), its pairs carry the tissue's law alone
       (skin and tissue in series mechanically). Runs under the scene's ``implicitfast`` at
-      0.5-2 ms, at about twice the cost (2 Prony terms x 6 branch knots + 1 dofs per skin geom).
+      0.5-2 ms, at about twice the cost (2 Prony terms x 6 branch knots + 1 dofs per skin geom);
+      refused above 2 ms, the timestep its pads are tested at under a hard grip (their
+      explicitly integrated spring is stable inside the calibrated 7 N up to 2.48-2.96 ms, but a
+      squeeze-5 grip loads regions to 12-45 N: ``softhand.envs.skins.check_pad_timestep``).
       The pad compresses along its normal only: a contact from the side (the palm's borders, a
       thumb's side) meets the tissue's law alone, and the force accounting says so
       (HandshakeRun.force_accounting; 43 % of the force in the default scene);
@@ -130,30 +154,36 @@ class HandshakeEnv(TwoHandTouchEnv):
     ``flex`` is refused: it needs the ``discrete`` integrator, under which the soft contacts do
     not hold; a flex region has its own scene (softhand.hands.flex_region).
 
-    Args:
-        design: skin of every region (a design such as ``pocket2-sil``, ``prosthetic-102l`` or
-            ``rigid``; default: the most lifelike design).
-        skins: region -> skin overrides, ``DESIGN`` or ``DESIGN@REPRESENTATION``.
-        representation: representation of every region (default ``soft-contact``; allowed:
-            ``HAND_REPRESENTATIONS``).
+    Args (None, where allowed, is the default; an empty string never is):
+        design: skin of every region, one of ``SKIN_CHOICES`` (a design such as
+            ``pocket2-sil``, ``prosthetic-102l`` or ``rigid``); default: the most lifelike design.
+        skins: mapping of region (Fig. 1 names) -> skin override, ``DESIGN`` or
+            ``DESIGN@REPRESENTATION`` (strings).
+        representation: representation of every region, one of ``HAND_REPRESENTATIONS``;
+            default ``soft-contact``.
         frame_skip: physics steps per action, an integer >= 1 with frame_skip x timestep_s <=
             0.1 s (actions at 10 Hz or faster); default: actions at 100 Hz
             (``ACTION_PERIOD_S / timestep_s``, 5 steps of 2 ms).
         timestep_s: physics timestep, in [0.0001, 0.005] s (``TIMESTEP_RANGE_S``; the skins are
             calibrated at 0.0005-0.002 s); default 2 ms (SceneConfig).
-        squeeze: multiplier of the partner's grip force (5 for the hard case), finite and > 0.
-        overload_N: region force above which the overload penalty applies, finite and > 0.
-        reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries, each finite and >= 0
-            (a weight is a magnitude: the sign of each term is fixed above).
-        calibration_dir: folder of the skin calibration files (default: the shipped ones); every
-            skin used is read and checked before the scene is built.
-        randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
-        sensor: the sensors' electronics (default :data:`FLEXIFORCE_A101`); the noise is drawn
-            from the episode's seed.
-        sensor_placement: one placement for every region, or a mapping region -> placement
-            (the rest ``interface``).
+        squeeze: multiplier of the partner's grip force, in (0, 5]: 5 is the hard case and the
+            partner's hardest grip (``MAX_SQUEEZE``: above about 3 its grip effort reaches its
+            limit and from 4 up the forces no longer follow the squeeze;
+            softhand.envs.partner.MAX_SQUEEZE has the measurements).
+        overload_N: region force (N) above which the overload penalty applies, finite and > 0.
+        reward_weights: mapping, override of ``DEFAULT_REWARD_WEIGHTS`` entries, each finite and
+            >= 0 (a weight is a magnitude: the sign of each term is fixed above).
+        calibration_dir: folder of the skin calibration files, a non-empty path (default: the
+            shipped ones); every skin used is read and checked before the scene is built.
+        randomize: True or False: vary the partner (timing +-5 %, grip +-10 %, shake phase)
+            from the seed.
+        sensor: the sensors' electronics, a :class:`SensorSpec` (default
+            :data:`FLEXIFORCE_A101`); the noise is drawn from the episode's seed.
+        sensor_placement: one placement for every region (``bone``, ``interface`` or
+            ``pocket-floor``), or a mapping region -> placement (the rest ``interface``).
         observe: ``sensor`` (default), ``contact`` or ``both`` (see the observation space).
-        sensor_dir: folder of ``transfer.json`` (default: the shipped ``calibration/sensors``).
+        sensor_dir: folder of ``transfer.json``, a non-empty path (default: the shipped
+            ``calibration/sensors``).
         hand: ``prosthetic`` (default) or ``human``: the paper's protocol, the sensored hand as
             the experimenter's relaxed human hand (HANDS): human tissue on every region against
             the partner's (both the human law), soft joint impedance
@@ -166,10 +196,14 @@ class HandshakeEnv(TwoHandTouchEnv):
             default the experimenter's 190 x 88 mm. The grasp is solved for this pair of hands.
 
     Raises:
-        ValueError: at construction, a bad argument or calibration file, naming it and the
-            allowed range; in :meth:`reset`, a bad seed; in :meth:`step`, an action that is not 6
-            finite real numbers in [-1, 1].
-        RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended.
+        ValueError: at construction, a bad argument or calibration file, naming it, the value
+            and the allowed range, before any model is built; in :meth:`reset`, a bad seed or
+            option (``options``: ``grip_N`` per phalanx in [1e-6, 12.5] N, ``duration_s`` in
+            [2, 6] s, ``shake_phase_rad`` in [-2 pi, 2 pi]); in :meth:`step`, an action that is not
+            6 finite real numbers in [-1, 1] (a numpy masked array with masked entries included:
+            the data under a mask is arbitrary).
+        RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended;
+            :meth:`step` or :meth:`reset` after :meth:`close`.
 
     Physics: every MuJoCo call of an episode goes through :attr:`physics`
     (:class:`~softhand.envs.physics.MujocoPhysics`), the seam a batched backend would implement.

@@ -7,7 +7,8 @@ touches MuJoCo's state during an episode goes through :class:`MujocoPhysics`:
 ============================== =====================================================================
 ``reset(mount_pos, quat, ...)``MuJoCo's reset, the partner's mount placed, motors pre-shaped
 ``advance(ctrl, mount_path)``  one action period: ``frame_skip`` steps, the mount following its
-                               prescribed path (one row per step), sensors read on the last step
+                               prescribed path (one row per step), sensors read on the last step;
+                               returns None, or the :class:`Divergence` that ended it
 ``region_forces()``            force (N) of each region: its skin's contact sensor and its bones
                                bottoming out under it; and the bones' part
 ``saturated_sensors()``        region sensors that matched more contacts than they have slots
@@ -24,14 +25,74 @@ and stay on the host. Timings of the handshake are of this class's ``advance``.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
 from softhand.hands.skeleton import SENSOR_SLOTS, contact_sensor_force
 
-__all__ = ["MujocoPhysics"]
+__all__ = ["Divergence", "DivergenceError", "MujocoPhysics", "mujoco_warnings_kept"]
 
 _NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+_W = mujoco.mjtWarning
+#: what each MuJoCo warning means, and whether its index is a qpos address (else a dof, an
+#: actuator or a count); MuJoCo resets the data after the three "bad" state warnings
+_WARNINGS = {int(_W.mjWARN_BADQACC): ("a bad acceleration", "dof"),
+             int(_W.mjWARN_BADQVEL): ("a bad velocity", "dof"),
+             int(_W.mjWARN_BADQPOS): ("a bad position", "qpos"),
+             int(_W.mjWARN_BADCTRL): ("a bad control", "actuator"),
+             int(_W.mjWARN_CONTACTFULL): ("a full contact buffer", "count"),
+             int(_W.mjWARN_CNSTRFULL): ("a full constraint buffer", "count"),
+             int(_W.mjWARN_INERTIA): ("an invalid inertia matrix", "dof")}
+_NAMES = {int(v): k for k, v in _W.__members__.items()}
+_RESETS = (int(_W.mjWARN_BADQACC), int(_W.mjWARN_BADQVEL), int(_W.mjWARN_BADQPOS))
+
+
+@dataclass(frozen=True)
+class Divergence:
+    """Why a physics step diverged: ``time_s``, the simulated time of the last good state (s),
+    and ``cause``, one line naming what MuJoCo found (its warning, the dof and joint), e.g.
+    ``MuJoCo reset the simulation after a bad acceleration (mjWARN_BADQACC) in dof 37 (joint
+    pro_skin_Little1_pad)``."""
+
+    time_s: float
+    cause: str
+
+    def __str__(self) -> str:
+        return f"{self.cause} at t = {self.time_s:.3f} s"
+
+
+class DivergenceError(RuntimeError):
+    """A run's simulation diverged (:class:`Divergence`): raised by the runs (e.g.
+    :func:`softhand.envs.run.run_handshake`) instead of continuing from MuJoCo's reset state.
+
+    Attributes: ``divergence``, ``skins`` and ``representations`` (region -> name), and
+    ``timestep_s``; :attr:`summary` says all but the advice, which ``str()`` adds.
+    """
+
+    def __init__(self, divergence: Divergence, *, skins: Mapping[str, str],
+                 representations: Mapping[str, str], timestep_s: float,
+                 what: str = "the handshake") -> None:
+        self.divergence = divergence
+        self.skins, self.representations = dict(skins), dict(representations)
+        self.timestep_s = float(timestep_s)
+        #: a smaller timestep to try (s): 1 ms from the default, else half, at least 0.1 ms
+        self.suggested_timestep_s = max(1e-4, min(1e-3, self.timestep_s / 2))
+        self.summary = (f"{what} diverged at t = {divergence.time_s:.3f} s ({divergence.cause}); "
+                        f"{_listed('skin', self.skins)}, "
+                        f"{_listed('representation', self.representations)}, timestep "
+                        f"{self.timestep_s * 1e3:g} ms")
+        super().__init__(f"{self.summary}; try a smaller timestep (e.g. "
+                         f"{self.suggested_timestep_s:g} s)")
+
+
+def _listed(what: str, by_region: Mapping[str, str]) -> str:
+    names = sorted(set(by_region.values()))
+    return f"{what} {names[0]}" if len(names) == 1 else f"{what}s {', '.join(names)}"
 
 
 class MujocoPhysics:
@@ -73,6 +134,9 @@ class MujocoPhysics:
         self._row = self.data.mocap_pos[self._mocap]
         self.ctrl, self._sensordata = self.data.ctrl, self.data.sensordata
         self.qpos, self.qvel = self.data.qpos, self.data.qvel
+        self._warnings = self.data.warning.number  # MuJoCo's warning counters (a view)
+        #: why the last :meth:`advance` diverged (None: it did not, or no step since reset)
+        self.divergence: Divergence | None = None
 
     @property
     def time(self) -> float:
@@ -84,7 +148,8 @@ class MujocoPhysics:
         ``preset`` set: a joint and its integrated-velocity servo's setpoint (a motor pre-shaped
         before the episode)."""
         m, d = self.model, self.data
-        mujoco.mj_resetData(m, d)
+        mujoco.mj_resetData(m, d)  # also zeroes MuJoCo's warning counters
+        self.divergence = None
         d.mocap_pos[self._mocap] = mount_pos
         d.mocap_quat[self._mocap] = mount_quat
         for qadr, aadr, value in preset:
@@ -93,22 +158,78 @@ class MujocoPhysics:
                 d.act[aadr] = value
         mujoco.mj_forward(m, d)
 
-    def advance(self, mount_path: np.ndarray) -> None:
+    def advance(self, mount_path: np.ndarray) -> Divergence | None:
         """``frame_skip`` steps with the controls already in :attr:`ctrl`, the mount at
         ``mount_path[i]`` on step i (shape (frame_skip, 3)). Sensors are computed on the last
-        step only: they do not act on the dynamics (35 contact sensors, read once per action)."""
+        step only: they do not act on the dynamics (35 contact sensors, read once per action).
+
+        Returns None, or the :class:`Divergence` that stopped it: MuJoCo reset the data after a
+        bad position, velocity or acceleration (its time went back; checked every step, and the
+        action period stops there), MuJoCo raised another warning (full contact or constraint
+        buffer, bad control, bad inertia), or the state is not finite. The state is then not a
+        continuation of the episode. The checks read a time per step and a few counters and
+        sums per action."""
         m, d, row, opt = self.model, self.data, self._row, self.model.opt
+        h = opt.timestep
+        self.divergence = None
         flags = opt.disableflags
         opt.disableflags = flags | _NO_SENSORS
         try:
             for pos in mount_path[:-1]:
                 row[:] = pos
+                t = d.time
                 mujoco.mj_step(m, d)
+                if d.time < t + 0.5 * h:  # MuJoCo reset the data (mj_checkPos/Vel/Acc)
+                    self.divergence = self._divergence(t)
+                    return self.divergence
             opt.disableflags = flags
             row[:] = mount_path[-1]
+            t = d.time
             mujoco.mj_step(m, d)
         finally:
             opt.disableflags = flags
+        if d.time < t + 0.5 * h or self._warnings.any():
+            self.divergence = self._divergence(t if d.time < t + 0.5 * h else d.time)
+        # a sum is finite only if every entry is (an overflow to inf is a divergence anyway);
+        # MuJoCo checks the state (and every step's qacc) at the start of its next step, so the
+        # state the last step made is checked here
+        elif not math.isfinite(self.qpos.sum() + self.qvel.sum()):
+            self.divergence = self._divergence(d.time)
+        return self.divergence
+
+    def _divergence(self, t: float) -> Divergence:
+        """What went wrong at ``t`` (s): MuJoCo's warning, or the first non-finite entry."""
+        m, d = self.model, self.data
+        fired = np.flatnonzero(self._warnings)
+        if fired.size:
+            w = int(fired[0])
+            what, kind = _WARNINGS.get(w, (f"warning {w}", "count"))
+            i = int(d.warning.lastinfo[w])
+            where = ""
+            if kind == "dof" and 0 <= i < m.nv:
+                where = f" in dof {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.dof_jntid[i])})"
+            elif kind == "qpos" and 0 <= i < m.nq:
+                j = int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1)
+                where = f" in qpos {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})"
+            elif kind == "actuator" and 0 <= i < m.nu:
+                where = f" of actuator {_name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i)}"
+            elif kind == "count":
+                where = f" ({i})"
+            head = "MuJoCo reset the simulation after" if w in _RESETS else "MuJoCo warned of"
+            return Divergence(t, f"{head} {what} ({_NAMES.get(w, w)}){where}")
+        if d.time < t:
+            return Divergence(t, "MuJoCo reset the simulation (its time went back to "
+                                 f"{d.time:.3f} s)")
+        for name, values, size in (("qpos", d.qpos, m.nq), ("qvel", d.qvel, m.nv),
+                                   ("qacc", d.qacc, m.nv)):
+            bad = np.flatnonzero(~np.isfinite(values[:size]))
+            if bad.size:
+                i = int(bad[0])
+                j = (int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1) if name == "qpos"
+                     else int(m.dof_jntid[i]))
+                return Divergence(t, f"non-finite state: {name}[{i}] = {values[i]} (joint "
+                                     f"{_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})")
+        return Divergence(t, "non-finite state")
 
     def region_forces(self) -> tuple[np.ndarray, np.ndarray]:
         """Per region: the force on its sensed skin and bone together (N), and the bone's part."""
@@ -139,3 +260,21 @@ class MujocoPhysics:
         top = limits[geoms[:, 0], geoms[:, 1]]
         over = force > top
         return geoms[over], force[over], top[over]
+
+
+def _name(model: mujoco.MjModel, kind: mujoco.mjtObj, i: int) -> str:
+    return mujoco.mj_id2name(model, kind, int(i)) or f"#{int(i)}"
+
+
+@contextmanager
+def mujoco_warnings_kept() -> Iterator[list[str]]:
+    """MuJoCo's warnings kept in a list (yielded) instead of printed and appended to
+    ``MUJOCO_LOG.TXT`` in the working folder, MuJoCo's default: a run reports a divergence
+    itself (:class:`DivergenceError`, from MuJoCo's warning counters). Process-wide while open."""
+    kept: list[str] = []
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(kept.append)
+    try:
+        yield kept
+    finally:
+        mujoco.set_mju_user_warning(old)

@@ -112,8 +112,10 @@ def run_partner(partner: Partner, settings: dict) -> dict:
     """One handshake with ``partner``; ``settings``: HandshakeEnv keywords (design, skins,
     representation, timestep_s, ...) and ``controller``. Returns what the population keeps:
     per region peak and mean force (N), the regions over 2 N, the force accounting, the grip
-    tracking, how many warnings the run raised (pairs beyond their calibrated range) and the
-    wall time (s)."""
+    tracking, how many warnings the run raised (its episode's summary of the contacts beyond their
+    calibrated range, and any from building the scene) and the wall time (s). The warnings are
+    counted, then passed on as they were (in a worker process, :func:`softhand.parallel.run_tasks`
+    brings them back to the main process)."""
     import time
 
     from softhand.envs.handshake import HandshakeEnv
@@ -122,13 +124,15 @@ def run_partner(partner: Partner, settings: dict) -> dict:
     settings = dict(settings)
     controller = settings.pop("controller", "neutral")
     t0 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:  # counted, not printed per partner
+    with warnings.catch_warnings(record=True) as caught:  # counted for the results
         warnings.simplefilter("always")
         env = HandshakeEnv(partner_size=(partner.hand_length_mm, partner.hand_width_mm),
                            randomize=False, **settings)
         run = run_handshake(env=env, controller=controller, seed=partner.seed, options={
             "grip_N": partner.grip_N, "duration_s": partner.duration_s,
             "shake_phase_rad": partner.shake_phase_rad})
+    for w in caught:  # and passed on, where they were raised
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     table = run.table()
     return {"partner": partner.to_dict(),
             "peak_N": {r: v["peak_N"] for r, v in table.items()},

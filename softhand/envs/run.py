@@ -12,6 +12,7 @@ import numpy as np
 from softhand import __version__
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
+from softhand.envs.physics import DivergenceError, mujoco_warnings_kept
 from softhand.envs.skins import calibrated_max_force, skin_of_pair
 from softhand.hands.config import HandConfig
 from softhand.laws.fit import REFERENCE_FORCE_N
@@ -487,7 +488,8 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     steps, wall = 0, 0.0
     while True:
         t0 = time.perf_counter()
-        obs, _, term, trunc, info = env.step(ctrl(obs, info))
+        with mujoco_warnings_kept():  # a divergence is raised below, not printed by MuJoCo
+            obs, _, term, trunc, info = env.step(ctrl(obs, info))
         wall += time.perf_counter() - t0
         steps += env.frame_skip
         if steps % record_every == 0 or term or trunc:
@@ -514,7 +516,9 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
         if term or trunc:
             break
     if term:
-        raise FloatingPointError(f"the handshake became unstable at t = {d.time:.3f} s")
+        raise DivergenceError(env.physics.divergence, skins=env.skins,
+                              representations=env.representations,
+                              timestep_s=float(m.opt.timestep))
     q = np.array(frames["q"])
     compression = np.where(pads >= 0, 1e3 * q[:, np.maximum(pads, 0)], np.nan)
     return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]), q,

@@ -11,7 +11,6 @@ is the specification of the action, observation and ``info`` that every touch sh
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
@@ -29,6 +28,7 @@ from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
 from softhand.envs.skins import (
     CalibratedRangeWarning,
     calibrated_max_force,
+    check_pad_timestep,
     parse_skins,
     series_law,
     skin_of_pair,
@@ -40,7 +40,8 @@ from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import HUMAN
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
 from softhand.skin.files import SKINS_DIR
-from softhand.validate import check_number, show
+from softhand.validate import check_number, check_path, show
+from softhand.warn import warn_at_caller
 
 __all__ = ["ACTION_PERIOD_S", "DEFAULT_TIMESTEP_S", "HANDS", "MAX_ACTION_PERIOD_S",
            "TwoHandTouchEnv"]
@@ -76,6 +77,12 @@ class TwoHandTouchEnv(gym.Env):
             raise ValueError(f"scenario = {show(scenario)}: expected a softhand.envs.scenario."
                              "Scenario")
         self.scenario = scenario
+        self._closed = False
+        # folders: None is the shipped one; an empty string is refused, not taken as the default
+        if calibration_dir is not None:
+            calibration_dir = check_path("calibration_dir", calibration_dir)
+        if sensor_dir is not None:
+            sensor_dir = check_path("sensor_dir", sensor_dir)
         check_number("timestep_s", timestep_s, lo=TIMESTEP_RANGE_S[0], hi=TIMESTEP_RANGE_S[1],
                      why="s (skins calibrated at 0.0005-0.002 s)")
         self.partner_size_mm = check_partner_size(partner_size)
@@ -114,10 +121,12 @@ class TwoHandTouchEnv(gym.Env):
         laws, self.sensor_placements = region_laws(self.skins, placements, sensor_dir)
         #: the regions' embedded sensors: transfer laws, then the electronics
         self.sensors = SensorChain(laws, spec, self.frame_skip * timestep_s)
-        directory = calibration_dir or SKINS_DIR
+        directory = SKINS_DIR if calibration_dir is None else calibration_dir
         self.calibration_dir = str(directory)  # where the skins' laws came from
         for skin in sorted({*self.skins.values(), "rigid"}):
             series_law(skin, str(directory))  # reads and checks the file (cached)
+        # a relaxation pad's spring is explicit: refused where the timestep cannot resolve it
+        check_pad_timestep(self.skins, self.representations, timestep_s, directory)
         # the laws are written into the spec, and the model is compiled from the spec's MJCF text,
         # so that models/mjcf/handshake_scene.xml is exactly the simulated model (the XML writer
         # rounds numbers: a model compiled from the spec itself differs in the last digits)
@@ -158,7 +167,7 @@ class TwoHandTouchEnv(gym.Env):
             top = calibrated_max_force(skin_of_pair(name, self.skins)[1], self.calibration_dir)
             self._range[g1, g2] = self._range[g2, g1] = top
             self._pair_name[(min(g1, g2), max(g1, g2))] = name
-        self._warned: set[str] = set()
+        self._reset_range_counts()
         n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self._n_obs = 2 * n + 19 + (18 if observe == "both" else 0)
@@ -171,11 +180,19 @@ class TwoHandTouchEnv(gym.Env):
     # --- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode; ``seed`` is None or an integer >= 0; ``options`` go to the scenario
-        (checked: softhand.envs.partner.check_reset_options)."""
+        (checked: softhand.envs.partner.check_reset_options). An episode cut short by this reset
+        issues its range summary first (:meth:`_warn_range`).
+
+        Raises:
+            RuntimeError: the env is closed.
+        """
+        self._check_open()
         if seed is not None and (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool)
                                  or seed < 0):
             raise ValueError(f"seed = {show(seed)}: expected None or an integer >= 0")
         options = check_reset_options(options)
+        if self._planned and self._ended is None:
+            self._warn_range(self._range_summary(), "cut short by reset()")
         super().reset(seed=None if seed is None else int(seed))
         rng = self.np_random
         start, quat = self.scenario.reset(self, rng, options)
@@ -191,14 +208,19 @@ class TwoHandTouchEnv(gym.Env):
         self.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
         self._readings = self.sensors.reading
         self._saturated = 0
-        self._beyond = 0
-        self._warned = set()
+        self._reset_range_counts()
         self._planned = True
         self._ended = None
         return self._obs(), self._info({}, self.scenario.phase(0.0))
 
     def step(self, action):
         """Advance one action period; see HandshakeEnv's docstring for the action and outputs."""
+        self._check_open()
+        if isinstance(action, np.ma.MaskedArray) and np.ma.getmaskarray(action).any():
+            # the data under a mask is arbitrary: np.asarray would pass it on as the action
+            raise ValueError(f"action {action} has masked entries (at "
+                             f"{np.flatnonzero(np.ma.getmaskarray(action)).tolist()}): expected 6 "
+                             "finite real values in [-1, 1], none masked")
         try:
             raw = np.asarray(action)
         except (TypeError, ValueError):  # ragged nested sequences
@@ -215,7 +237,7 @@ class TwoHandTouchEnv(gym.Env):
         if not self._planned:
             raise RuntimeError("call reset() before step()")
         if self._ended is not None:
-            raise RuntimeError(f"the episode is over ({self._ended} at t = {self.data.time:.3f} "
+            raise RuntimeError(f"the episode is over ({self._ended} at t = {self._ended_s:.3f} "
                                "s): call reset() before step()")
         physics, scenario = self.physics, self.scenario
         ctrl, opt = self._ctrl, self.model.opt
@@ -229,40 +251,118 @@ class TwoHandTouchEnv(gym.Env):
                                                         opt.timestep * self.frame_skip)
         k, last = self._step_index, len(self._mount) - 1
         end = k + self.frame_skip
-        physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
+        # None, or why the physics diverged (MuJoCo reset itself, warned, or went non-finite)
+        diverged = physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
         self._step_index = end
-        self._forces, self._bone = physics.region_forces()
-        self._readings = self.sensors.step(self._forces)
-        self._saturated = physics.saturated_sensors()
-        self._check_range()
+        unstable = diverged is not None
+        if not unstable:  # a diverged step keeps the last good forces and readings
+            self._forces, self._bone = physics.region_forces()
+            self._readings = self.sensors.step(self._forces)
+            self._saturated = physics.saturated_sensors()
+            self._check_range()
         d = self.data
-        phase = scenario.phase(d.time)
-        # a sum is finite only if every entry is (an overflow to inf is unstable anyway)
-        unstable = not np.isfinite(self._qpos.sum() + self._qvel.sum())
+        now = diverged.time_s if unstable else d.time
+        phase = scenario.phase(now)
         terms = scenario.reward_terms(self._forces, a, phase)
         reward = sum(terms.values()) if not unstable else -100.0
         truncated = d.time >= scenario.duration_s - 1e-9
         info = self._info(terms, phase)
-        info["unstable"] = unstable
+        info["unstable"] = str(diverged) if unstable else False
+        if unstable:  # the time of the last good state, not of MuJoCo's reset state
+            info["time_s"] = now
         obs = self._obs() if not unstable else np.zeros(self._n_obs)
         truncated = bool(truncated and not unstable)
         if unstable or truncated:
             self._ended = "terminated" if unstable else "truncated"
+            self._ended_s = info["time_s"]  # after a divergence: the last good state's time
+        if self._ended is not None:  # the episode's one summary of its contacts beyond range
+            info["beyond_range_summary"] = summary = self._range_summary(info["time_s"])
+            self._warn_range(summary, "ended")
         return obs, reward, unstable, truncated, info
 
+    def close(self) -> None:
+        """Release the env: :meth:`step` and :meth:`reset` refuse afterwards (closing twice is
+        harmless). An episode cut short here issues its range summary (:meth:`_warn_range`)."""
+        if getattr(self, "_closed", True):  # closed, or __init__ stopped before the scene
+            return
+        if getattr(self, "_planned", False) and self._ended is None:
+            self._warn_range(self._range_summary(), "cut short by close()")
+        self._closed = True
+        super().close()
+
     # --- helpers -----------------------------------------------------------------------------
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RuntimeError("the env is closed (close() was called): make a new env")
+
+    def _reset_range_counts(self) -> None:
+        """Zero the episode's counts of contacts beyond their calibrated range."""
+        self._beyond = 0  # pair contacts beyond range at this step
+        self._beyond_N: dict[str, float] = {}  # pair -> its force (N) at this step, if beyond
+        self._episode_steps = 0
+        self._beyond_steps = 0  # pair contacts beyond range, summed over the episode's steps
+        self._bone_steps = 0  # regions with bone bottoming out, summed over the steps
+        self._worst: dict[str, tuple[float, float, float]] = {}  # pair -> (N, limit N, t s)
+
     def _check_range(self) -> None:
-        """Count the contacts above their pair law's calibrated range; warn once per pair."""
+        """Count the contacts above their pair law's calibrated range at this step (``info``) and
+        into the episode's counts; the episode warns once, at its end (:meth:`_warn_range`)."""
         geoms, force, top = self.physics.contacts_above(self._range)
         self._beyond = int(force.size)
-        for (g1, g2), f, lim in zip(geoms, force, top, strict=True):
+        self._beyond_N = {}
+        self._episode_steps += 1
+        self._beyond_steps += self._beyond
+        self._bone_steps += int((self._bone > 0).sum())
+        t = self.physics.time
+        for (g1, g2), f, lim in zip(geoms.tolist(), force.tolist(), top.tolist(), strict=True):
             name = self._pair_name[(min(g1, g2), max(g1, g2))]
-            if name not in self._warned:
-                self._warned.add(name)
-                warnings.warn(f"pair {name}: {f:.2f} N is beyond the {lim:g} N its law "
-                              f"({skin_of_pair(name, self.skins)[1]} in series with human tissue) "
-                              "is calibrated to; the force above that is an extrapolation",
-                              CalibratedRangeWarning, stacklevel=3)
+            self._beyond_N[name] = max(f, self._beyond_N.get(name, 0.0))
+            if f > self._worst.get(name, (0.0,))[0]:
+                self._worst[name] = (f, lim, t)
+
+    def _range_summary(self, time_s: float | None = None) -> dict[str, Any]:
+        """The episode's contacts beyond their calibrated range so far (``info
+        ["beyond_range_summary"]`` on the episode's last step): ``contact_steps`` (pair contacts
+        beyond range summed over the steps), ``pairs`` (how many pairs went beyond),
+        ``bone_steps`` (regions with bone bottoming out, summed over the steps: with
+        ``contact_steps``, the sum of ``info["contacts_beyond_range"]``), the worst pair (largest
+        force over its law's limit): ``worst_pair``, ``worst_skin``, ``worst_force_N``,
+        ``worst_limit_N``, ``worst_time_s`` (None when no pair went beyond), and ``steps`` and
+        ``time_s`` (default: the state's time) of the episode."""
+        out: dict[str, Any] = {"contact_steps": self._beyond_steps, "pairs": len(self._worst),
+                               "bone_steps": self._bone_steps, "worst_pair": None,
+                               "worst_skin": None, "worst_force_N": None, "worst_limit_N": None,
+                               "worst_time_s": None, "steps": self._episode_steps,
+                               "time_s": float(self.data.time if time_s is None else time_s)}
+        if self._worst:
+            name, (f, lim, t) = max(self._worst.items(), key=lambda kv: kv[1][0] / kv[1][1])
+            out.update(worst_pair=name, worst_skin=skin_of_pair(name, self.skins)[1],
+                       worst_force_N=f, worst_limit_N=lim, worst_time_s=t)
+        return out
+
+    def _warn_range(self, summary: dict[str, Any], how: str) -> None:
+        """One :class:`CalibratedRangeWarning` for an episode that had contacts beyond range,
+        attributed to the user's code that called step(), reset() or close() (through
+        Gymnasium's wrappers too): issued on the step that ends the episode (``how`` "ended"), or
+        when reset() or close() cuts it short."""
+        parts = []
+        if summary["contact_steps"]:
+            law = ("human tissue's, the skin rigid" if summary["worst_skin"] == "rigid"
+                   else f"{summary['worst_skin']} in series with human tissue")
+            parts.append(
+                f"{summary['contact_steps']} contact-steps on {summary['pairs']} pair(s) beyond "
+                f"their law's calibrated range; the worst, pair {summary['worst_pair']}, carried "
+                f"{summary['worst_force_N']:.2f} N at t = {summary['worst_time_s']:.2f} s "
+                f"against the {summary['worst_limit_N']:g} N its law ({law}) is calibrated to: "
+                "the force above that is an extrapolation")
+        if summary["bone_steps"]:
+            parts.append(f"a bone bottomed out under a region in {summary['bone_steps']} "
+                         "region-steps (outside every law's calibration)")
+        if parts:
+            where = " (info['beyond_range_summary'])" if how == "ended" else ""
+            warn_at_caller(f"episode {how} at t = {summary['time_s']:.2f} s after "
+                           f"{summary['steps']} steps: {'; '.join(parts)}{where}",
+                           CalibratedRangeWarning)
 
     def _obs(self) -> np.ndarray:
         n = self._pro_qpos.size
@@ -285,5 +385,6 @@ class TwoHandTouchEnv(gym.Env):
                 "saturated_sensors": self._saturated,
                 "thumb_rotation_rad": float(self._qpos[self.thumb_rotation_qpos]),
                 "contacts_beyond_range": self._beyond + int((self._bone > 0).sum()),
+                "pairs_beyond_range_N": dict(self._beyond_N),
                 "region_bone_N": dict(zip(names, self._bone.tolist(), strict=True)),
                 **self.scenario.info()}

@@ -20,9 +20,10 @@ __all__ = ["ACTUATIONS", "TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "Pro
 
 #: Allowed simulation timestep of the handshake scene, closed interval (s). The skins were
 #: calibrated and are tested at 0.5-2 ms (``softhand.skin.rig.CHECKED_TIMESTEPS_S``; the env tests
-#: run 0.5, 1 and 2 ms); outside that band, inside this range, every skin pair warns
-#: (``SkinRangeWarning``). 5 ms: the rig's impact and overload test stays bounded there and a
-#: handshake with each controller stays finite, but its forces are not checked against 0.5 ms.
+#: run 0.5, 1 and 2 ms); outside that band, inside this range, every skin pair is outside its
+#: checked range (one ``SkinRangeWarning`` for the scene, counting them). 5 ms: the rig's impact
+#: and overload test stays bounded there and a handshake with each controller stays finite, but
+#: its forces are not checked against 0.5 ms.
 #: 0.1 ms: five times finer than the reference step; an episode precomputes one mount target per
 #: physics step (36,300 at 0.1 ms, under 1 MB), so a smaller step would grow without bound.
 TIMESTEP_RANGE_S = (1e-4, 5e-3)

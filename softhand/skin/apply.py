@@ -50,7 +50,7 @@ from softhand import __version__
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paths import FE_DIR, SKINS_DIR
 from softhand.skin.representations import StockContact, get_representation, loading_ramp
-from softhand.skin.rig import pair_law_values
+from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
 __all__ = ["APPLY_REPRESENTATIONS", "SkinnedGeom", "apply_skin", "parse_geom_skins",
@@ -234,6 +234,7 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
             made[geom].append(name)
     model = spec.compile()
     out = []
+    issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
     for geom, (design, rep) in chosen.items():
         law = laws.get(design) if rep == "soft-contact" else None
         for name in made[geom]:
@@ -242,9 +243,10 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                 stock = StockContact()
                 pair.solref, pair.solimp = list(stock.solref), list(stock.solimp)
             else:
-                pair.solref, pair.solimp = pair_law_values(model, name, law)
+                pair.solref, pair.solimp = pair_law_values(model, name, law, issues=issues)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
                                None if law is None else max_force_N))
+    warn_range_issues(issues)
     return out
 
 

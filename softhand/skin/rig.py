@@ -25,8 +25,10 @@ import numpy as np
 from softhand.laws.fit import Curve, paired_arrays
 from softhand.skin.representations import StockContact, get_representation
 from softhand.skin.soft_contact import SoftContactParams
+from softhand.warn import warn_at_caller
 
-__all__ = ["RigSettings", "build_rig", "run_rig"]
+__all__ = ["RangeIssue", "RigSettings", "SkinRangeWarning", "build_rig", "pair_law_values",
+           "run_rig", "warn_range_issues"]
 
 SKIN_HALF_AXES_M = (0.005, 0.008, 0.0125)  # phalanx: 10 mm long, 16 mm wide; 25 mm tall so
 # that a plate 8.6 mm deep (human tissue at 20 N) is still far from its far side (a convex
@@ -129,10 +131,53 @@ def pair_inverse_inertia(model: mujoco.MjModel, pair_id: int) -> float:
 
 
 class SkinRangeWarning(UserWarning):
-    """A skin is used outside the range its calibration was checked in."""
+    """A skin is used outside the range its calibration was checked in (one warning for a whole
+    model: per kind of problem, the number of pairs and the worst one)."""
 
 
 CHECKED_TIMESTEPS_S = (0.5e-3, 2e-3)  # the calibration is tested at 0.5, 1 and 2 ms
+
+
+@dataclass(frozen=True)
+class RangeIssue:
+    """One way a pair law is used outside its calibration.
+
+    Attributes:
+        kind: ``timestep`` (outside :data:`CHECKED_TIMESTEPS_S`) or ``stiffness`` (the skin's
+            stiffest point on the pair's effective mass oscillates faster than an explicit
+            constraint update follows: omega x timestep > 1).
+        pair: the pair's name.
+        severity: how far outside: the timestep over the nearest checked bound (or that bound over
+            the timestep, >= 1), or omega x timestep.
+        message: the one-pair message, starting ``pair 'NAME': ``.
+    """
+
+    kind: str
+    pair: str
+    severity: float
+    message: str
+
+
+def warn_range_issues(issues: list[RangeIssue]) -> None:
+    """One :class:`SkinRangeWarning` for all the ``issues`` of a model (none if there are none),
+    attributed to the user's code: the pair's message when there is one issue, else the number
+    of pairs and, per kind of issue, how many pairs have it and the worst one's message."""
+    if not issues:
+        return
+    if len(issues) == 1:
+        warn_at_caller(issues[0].message, SkinRangeWarning)
+        return
+    kinds: dict[str, list[RangeIssue]] = {}
+    for issue in issues:
+        kinds.setdefault(issue.kind, []).append(issue)
+    parts = []
+    for kind, group in kinds.items():
+        worst = max(group, key=lambda i: i.severity)
+        parts.append(f"{kind}: {len(group)} pair{'s' if len(group) > 1 else ''}, the worst "
+                     f"{worst.message}")
+    pairs = len({i.pair for i in issues})
+    warn_at_caller(f"{pairs} skin pairs are outside their calibrated range; {'; '.join(parts)}",
+                   SkinRangeWarning)
 
 
 def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactParams) -> None:
@@ -144,19 +189,20 @@ def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactPa
     model.pair_solref[pid], model.pair_solimp[pid] = pair_law_values(model, pid, params)
 
 
-def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactParams
-                    ) -> tuple[np.ndarray, np.ndarray]:
+def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactParams, *,
+                    issues: list[RangeIssue] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pair's ``solref`` and ``solimp`` for ``params``, scaled by its inverse inertia.
 
     ``model`` is the compiled model (its ``body_invweight0``); the values may go into that model
     or into the spec it was compiled from (the inverse inertia does not depend on them).
 
-    Warns (:class:`SkinRangeWarning`) when the timestep is outside the checked range, or when the
-    skin's stiffest point on the pair's effective mass oscillates faster than an explicit
-    constraint update can follow (omega * timestep > 1; ``discrete`` integrates it implicitly).
+    The pair is outside its calibrated range (a :class:`RangeIssue`) when the timestep is outside
+    the checked range, or when the skin's stiffest point on the pair's effective mass oscillates
+    faster than an explicit constraint update can follow (omega * timestep > 1; ``discrete``
+    integrates it implicitly). With ``issues`` None this warns at once
+    (:func:`warn_range_issues`); a caller that sets many pairs passes a list, which collects the
+    issues, and warns once for all of them (:func:`warn_range_issues`).
     """
-    import warnings
-
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     if pid < 0:
         raise ValueError(f"pair {pair!r} is not in the model")
@@ -164,18 +210,25 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
     values = (np.asarray(params.solref(inv), dtype=float), np.asarray(params.solimp, dtype=float))
     h = float(model.opt.timestep)
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
-    if not CHECKED_TIMESTEPS_S[0] <= h <= CHECKED_TIMESTEPS_S[1]:
-        warnings.warn(f"pair {name!r}: timestep {h * 1e3:g} ms is outside the calibrated range "
-                      f"{CHECKED_TIMESTEPS_S[0] * 1e3:g}-{CHECKED_TIMESTEPS_S[1] * 1e3:g} ms",
-                      SkinRangeWarning, stacklevel=2)
+    found = []
+    lo, hi = CHECKED_TIMESTEPS_S
+    if not lo <= h <= hi:
+        found.append(RangeIssue("timestep", name, max(h / hi, lo / h),
+                                f"pair {name!r}: timestep {h * 1e3:g} ms is outside the calibrated "
+                                f"range {lo * 1e3:g}-{hi * 1e3:g} ms"))
     omega = float(np.sqrt(params.end_stiffness * inv))
     explicit = model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE
     if explicit and omega * h > 1.0:
-        warnings.warn(f"pair {name!r}: skin stiffness {params.end_stiffness:.3g} N/m on effective "
-                      f"mass {1 / inv:.3g} kg oscillates at {omega:.3g} rad/s; omega * timestep = "
-                      f"{omega * h:.2f} > 1 is outside the calibrated range (unstable): use a "
-                      f"timestep below {1e3 / omega:.3g} ms or a heavier body",
-                      SkinRangeWarning, stacklevel=2)
+        found.append(RangeIssue(
+            "stiffness", name, omega * h,
+            f"pair {name!r}: skin stiffness {params.end_stiffness:.3g} N/m on effective "
+            f"mass {1 / inv:.3g} kg oscillates at {omega:.3g} rad/s; omega * timestep = "
+            f"{omega * h:.2f} > 1 is outside the calibrated range (unstable): use a "
+            f"timestep below {1e3 / omega:.3g} ms or a heavier body"))
+    if issues is None:
+        warn_range_issues(found)
+    else:
+        issues.extend(found)
     return values
 
 

@@ -22,6 +22,7 @@ import numpy as np
 from softhand.envs.partner import (
     GRIP_FORCE_N,
     GRIP_PHALANGES,
+    MAX_SQUEEZE,
     PHASES,
     PartnerScript,
     RelaxedHand,
@@ -46,10 +47,13 @@ class HandshakeScenario(Scenario):
     """The handshake (module docstring).
 
     Args:
-        squeeze: multiplier of the partner's grip force (5 for the hard case), finite and > 0.
-        overload_N: region force above which the overload penalty applies, finite and > 0.
+        squeeze: multiplier of the partner's grip force, in (0, 5] (``MAX_SQUEEZE``, the hard
+            case: above it the partner's grip effort is at its limit and the forces no longer
+            follow the squeeze, see softhand.envs.partner.MAX_SQUEEZE).
+        overload_N: region force (N) above which the overload penalty applies, finite and > 0.
         reward_weights: override of ``DEFAULT_REWARD_WEIGHTS`` entries, each finite and >= 0.
-        randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed.
+        randomize: vary the partner (timing +-5 %, grip +-10 %, shake phase) from the seed;
+            True or False.
     """
 
     name: ClassVar[str] = "handshake"
@@ -61,7 +65,11 @@ class HandshakeScenario(Scenario):
     def __init__(self, *, squeeze: float = 1.0, overload_N: float = 10.0,
                  reward_weights: Mapping[str, float] | None = None,
                  randomize: bool = True) -> None:
-        self.squeeze = check_number("squeeze", squeeze, lo=0.0, lo_open=True)
+        self.squeeze = check_number("squeeze", squeeze, lo=0.0, hi=MAX_SQUEEZE, lo_open=True,
+                                    why=f"(above {MAX_SQUEEZE:g} the partner's grip is at its "
+                                        "limit: softhand.envs.partner.MAX_SQUEEZE)")
+        # no upper bound: a threshold above every force the scene makes switches the term off,
+        # as a zero weight does
         self.overload_N = check_number("overload_N", overload_N, lo=0.0, lo_open=True)
         weights = dict(DEFAULT_REWARD_WEIGHTS)
         if reward_weights is not None and not isinstance(reward_weights, Mapping):
