@@ -586,7 +586,7 @@ _OPT_HAND = click.option(
 @click.option("--timestep", "timestep_s", type=Number(1e-4, 5e-3, unit="s"), default=0.002,
               show_default=True,
               help="Physics timestep, 0.0001-0.005 s (skins calibrated and tested at "
-                   "0.0005-0.002 s). Actions stay at 100 Hz.")
+                   "0.0005-0.002 s). Actions every 10 ms (the most timesteps that fit in it).")
 @click.option("--record", "record_path", default=None,
               help="Write a rerun recording here (a .rrd file; a missing folder is created).")
 @click.option("--sensor-placement", "placement_items", multiple=True,

@@ -249,3 +249,12 @@ def test_the_default_sensor_and_none_are_accepted():
                        sensor=FLEXIFORCE_A101, sensor_placement=None, sensor_dir=None,
                        partner_size=None, frame_skip=None)
     assert env.skins["Index1"] == "pocket2-sil" and env.representations["Index1"] == "soft-contact"
+
+
+def test_a_timestep_that_does_not_divide_ten_milliseconds_keeps_the_env_step_within_it():
+    """2.75 ms used to round to 4 steps (an 11 ms env step), coarser than the sensors' default
+    10 ms sampling: the env refused its own defaults. The env step is now the most physics steps
+    that fit in 10 ms."""
+    env = HandshakeEnv(timestep_s=0.00275)
+    assert env.frame_skip == 3
+    env.close()

@@ -162,8 +162,9 @@ class HandshakeEnv(TwoHandTouchEnv):
         representation: representation of every region, one of ``HAND_REPRESENTATIONS``;
             default ``soft-contact``.
         frame_skip: physics steps per action, an integer >= 1 with frame_skip x timestep_s <=
-            0.1 s (actions at 10 Hz or faster); default: actions at 100 Hz
-            (``ACTION_PERIOD_S / timestep_s``, 5 steps of 2 ms).
+            0.1 s (actions at 10 Hz or faster); default: the most physics steps that fit in
+            ``ACTION_PERIOD_S`` (10 ms: 5 steps of 2 ms; 3 of 2.75 ms, an 8.25 ms action step,
+            so that the sensors' default 10 ms sampling is never finer than the env step).
         timestep_s: physics timestep, in [0.0001, 0.005] s (``TIMESTEP_RANGE_S``; the skins are
             calibrated at 0.0005-0.002 s); default 2 ms (SceneConfig).
         squeeze: multiplier of the partner's grip force, in (0, 5]: 5 is the hard case and the

@@ -96,7 +96,9 @@ class TwoHandTouchEnv(gym.Env):
         timestep_s = self.config.timestep_s
         max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
-            frame_skip = max(1, round(ACTION_PERIOD_S / timestep_s))
+            # floor, not round: 2.75 ms rounded to 4 steps made an 11 ms env step, coarser than
+            # the sensors' default 10 ms period, and the env refused its own default
+            frame_skip = max(1, int(ACTION_PERIOD_S / timestep_s + 1e-9))
         check_number("frame_skip", frame_skip, lo=1, hi=max_skip, integer=True,
                      why=f"(frame_skip x timestep_s <= {MAX_ACTION_PERIOD_S:g} s)")
         if hand == "human":
