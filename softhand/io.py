@@ -69,7 +69,8 @@ def _nearest_existing(path: Path) -> Path:
     return p
 
 
-def check_writable_dir(path: str | os.PathLike, *, name: str = "path") -> Path:
+def check_writable_dir(path: str | os.PathLike, *, name: str = "path",
+                       shown: str | None = None) -> Path:
     """``path`` as a folder that can be written (created with its parents if missing).
 
     Checked before any work, leaving nothing behind: the path is not empty, no name in it is
@@ -79,12 +80,13 @@ def check_writable_dir(path: str | os.PathLike, *, name: str = "path") -> Path:
     everywhere) is found now, not after the work.
 
     Raises:
-        ValueError: naming ``name`` and the path.
+        ValueError: naming ``name`` and the path (or ``shown``: the file the folder is for).
     """
     text = os.fspath(path)
     if not text.strip():
         raise ValueError(f"{name} = {text!r}: expected a folder path, got an empty string")
-    shown = text if len(text) <= 80 else f"{text[:40]}...{text[-30:]}"
+    shown = shown or text
+    shown = shown if len(shown) <= 80 else f"{shown[:40]}...{shown[-30:]}"
     long = [part for part in Path(text).parts if len(os.fsencode(part)) > NAME_MAX]
     if long or len(os.fsencode(text)) > PATH_MAX:
         what = (f"the name {long[0][:30]!r}... has {len(os.fsencode(long[0]))} bytes" if long
@@ -93,7 +95,8 @@ def check_writable_dir(path: str | os.PathLike, *, name: str = "path") -> Path:
                          f"and {PATH_MAX} a path")
     target = Path(text)
     if target.exists() and not target.is_dir():
-        raise ValueError(f"{name} = {shown!r} is a file, not a folder")
+        raise ValueError(f"{name} = {shown!r} is a file, not a folder" if shown == text else
+                         f"{name} = {shown!r}: {text!r} is a file, not a folder")
     base = _nearest_existing(target.resolve())
     if not base.is_dir():
         raise ValueError(f"{name} = {shown!r}: {str(base)!r} is a file, so no folder can be made "
@@ -130,7 +133,7 @@ def check_writable_file(path: str | os.PathLike, *, suffix: str | None = None,
                          "socket): expected a file path")
     if target.exists() and not os.access(target, os.W_OK):
         raise ValueError(f"{name} = {text!r}: the file is not writable")
-    check_writable_dir(target.parent if str(target.parent) else ".", name=name)
+    check_writable_dir(target.parent if str(target.parent) else ".", name=name, shown=text)
     return target
 
 
