@@ -636,6 +636,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         if msg.startswith("sensor "):
             bad(sensor_flag_message(msg) if "placement" not in msg
                 else f"--sensor-placement: {msg}")
+        if msg.startswith("timestep_s = "):  # a timestep the chosen skins cannot take
+            bad(f"--timestep {msg.removeprefix('timestep_s = ')}")
         bad(f"--representation / --skin: {exc}" if "representation" in msg else msg)
     try:
         run = run_handshake(controller=controller, seed=seed, env=env, signal=signal,

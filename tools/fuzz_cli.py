@@ -102,6 +102,13 @@ CASES: list[tuple[str, str, list[str]]] = [
     # item 4: divergence
     ("4", "handshake --representation soft-contact+relaxation --controller open-loop",
      ["handshake", "--representation", "soft-contact+relaxation", "--controller", "open-loop"]),
+    ("4", "relaxation, open-loop, partner 215 x 75 mm (a Table 1 corner)",
+     ["handshake", "--representation", "soft-contact+relaxation", "--controller", "open-loop",
+      "--partner-size", "215,75"]),
+    ("4", "relaxation, open-loop, --timestep 0.005",
+     ["handshake", "--representation", "soft-contact+relaxation", "--controller", "open-loop",
+      "--timestep", "0.005"]),
+    ("5", "--timestep 0.00275 (inside the help's range)", ["handshake", "--timestep", "0.00275"]),
     # item 6: warnings
     ("6", "handshake --timestep 0.005", ["handshake", "--timestep", "0.005"]),
     ("6", "handshake (default)", ["handshake"]),
@@ -193,12 +200,13 @@ def main() -> None:
     run.add_argument("--checkout", required=True, type=Path)
     run.add_argument("--out", required=True, type=Path)
     run.add_argument("--only", default=None, help="run the cases whose name holds this text")
+    run.add_argument("--merge", action="store_true", help="add to --out instead of replacing it")
     tab = sub.add_parser("table")
     tab.add_argument("old", type=Path)
     tab.add_argument("new", type=Path)
     a = ap.parse_args()
     if a.cmd == "run":
-        results = {}
+        results = json.loads(a.out.read_text()) if a.merge and a.out.exists() else {}
         for item, name, args in CASES:
             if a.only and a.only not in name:
                 continue
