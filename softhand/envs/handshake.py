@@ -147,7 +147,8 @@ class HandshakeEnv(TwoHandTouchEnv):
       squeeze-5 grip loads regions to 12-45 N: ``softhand.envs.skins.check_pad_timestep``).
       The pad compresses along its normal only: a contact from the side (the palm's borders, a
       thumb's side) meets the tissue's law alone, and the force accounting says so
-      (HandshakeRun.force_accounting; 43 % of the force in the default scene);
+      (HandshakeRun.force_accounting; 63 % of the force in the default scene,
+      ``softhand handshake --representation soft-contact+relaxation --json``);
       HandshakeRun.relaxation() measures each pad against the QLV law;
     * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
 
