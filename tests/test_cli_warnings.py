@@ -38,6 +38,7 @@ def test_the_summary_prints_when_the_command_fails_and_filters_still_apply(capsy
             warnings.warn("an error now", CalibratedRangeWarning, stacklevel=1)
 
 
+@pytest.mark.slow
 def test_handshake_outside_the_calibrated_timestep_prints_one_line_per_kind():
     """``softhand handshake --timestep 0.005`` (inside the help's range) printed 385 warning
     lines (383 SkinRangeWarning, one per pair, and 2 CalibratedRangeWarning); now one line per

@@ -155,6 +155,7 @@ def test_cli_render_reports_a_divergence_as_one_line_and_exit_3(monkeypatch, tmp
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.slow
 def test_cli_population_records_a_diverged_partner_as_its_error(monkeypatch, tmp_path):
     _inject(monkeypatch, "qvel")
     res = CliRunner().invoke(main, ["population", "--n", "1", "--workers", "1", "--out",

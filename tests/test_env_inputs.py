@@ -251,10 +251,15 @@ def test_the_default_sensor_and_none_are_accepted():
     assert env.skins["Index1"] == "pocket2-sil" and env.representations["Index1"] == "soft-contact"
 
 
-def test_a_timestep_that_does_not_divide_ten_milliseconds_keeps_the_env_step_within_it():
+@pytest.mark.parametrize("timestep_s, skip", [(0.002, 5), (0.001, 10), (0.0005, 20),
+                                              (0.005, 2), (0.00275, 3), (0.0035, 2),
+                                              (0.0045, 2), (0.003, 3), (0.0001, 100)])
+def test_the_default_env_step_is_the_most_physics_steps_that_fit_in_ten_milliseconds(timestep_s,
+                                                                                       skip):
     """2.75 ms used to round to 4 steps (an 11 ms env step), coarser than the sensors' default
-    10 ms sampling: the env refused its own defaults. The env step is now the most physics steps
-    that fit in 10 ms."""
-    env = HandshakeEnv(timestep_s=0.00275)
-    assert env.frame_skip == 3
-    env.close()
+    10 ms sampling: the env refused its own defaults (--timestep 0.00275, inside the help's
+    range). Timesteps that divide 10 ms are unchanged."""
+    from softhand.envs.touch import default_frame_skip
+
+    assert default_frame_skip(timestep_s) == skip
+    assert skip * timestep_s <= 0.01 + 1e-12 < (skip + 1) * timestep_s

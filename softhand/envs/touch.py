@@ -44,10 +44,18 @@ from softhand.validate import check_number, check_path, show
 from softhand.warn import warn_at_caller
 
 __all__ = ["ACTION_PERIOD_S", "DEFAULT_TIMESTEP_S", "HANDS", "MAX_ACTION_PERIOD_S",
-           "TwoHandTouchEnv"]
+           "TwoHandTouchEnv", "default_frame_skip"]
 
 ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
 MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
+
+
+def default_frame_skip(timestep_s: float) -> int:
+    """Physics steps per action by default: the most that fit in ``ACTION_PERIOD_S`` (at least 1).
+
+    Floor, not round: 2.75 ms rounded to 4 steps made an 11 ms env step, coarser than the
+    embedded sensors' default 10 ms sampling period, and the env refused its own defaults."""
+    return max(1, int(ACTION_PERIOD_S / timestep_s + 1e-9))
 DEFAULT_TIMESTEP_S = SceneConfig.timestep_s
 #: The sensored hand: the prosthetic hand (default, its 6 motors driven by the action), or the
 #: paper's experimenter's relaxed human hand (human tissue on every region, soft joint
@@ -96,9 +104,7 @@ class TwoHandTouchEnv(gym.Env):
         timestep_s = self.config.timestep_s
         max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
-            # floor, not round: 2.75 ms rounded to 4 steps made an 11 ms env step, coarser than
-            # the sensors' default 10 ms period, and the env refused its own default
-            frame_skip = max(1, int(ACTION_PERIOD_S / timestep_s + 1e-9))
+            frame_skip = default_frame_skip(timestep_s)
         check_number("frame_skip", frame_skip, lo=1, hi=max_skip, integer=True,
                      why=f"(frame_skip x timestep_s <= {MAX_ACTION_PERIOD_S:g} s)")
         if hand == "human":
