@@ -17,6 +17,7 @@ import mujoco
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from pad_rig import press_pad
 
 from softhand.cli import main
 from softhand.envs.handshake import HandshakeEnv
@@ -24,10 +25,9 @@ from softhand.envs.physics import Divergence, DivergenceError
 from softhand.envs.run import run_handshake
 from softhand.envs.skins import check_pad_timestep
 from softhand.hands.skeleton import new_spec
-from softhand.laws.references import HUMAN
 from softhand.skin.files import load_calibration
 from softhand.skin.representations import HandPad, add_hand_pad
-from softhand.skin.rig import SkinRangeWarning, apply_pair_law
+from softhand.skin.rig import SkinRangeWarning
 
 AT_S = 0.05 - 1e-9  # the state goes bad on the step that starts at t = 0.050 s
 JOINT = "pro_index_mcp"
@@ -169,45 +169,11 @@ def test_cli_population_records_a_diverged_partner_as_its_error(monkeypatch, tmp
 
 def _pad_press(design: str, *, timestep: float, force_N: float, behind: bool = False,
                hold_s: float = 0.5) -> tuple[np.ndarray, np.ndarray, int]:
-    """A hand pad of ``design`` on a 1 kg segment (its mount stable at every allowed timestep),
-    pressed in 0.3 s by a plate through human tissue to about ``force_N`` and held, under the
-    hand's implicitfast; ``behind``: the plate presses from the bone's side (pushing the pad
-    past its rest, as a partner's finger curled round a phalanx does). Returns the pad's
-    compression (mm) and contact force (N) per step and how many times MuJoCo reset."""
-    cal, tissue = load_calibration(design), load_calibration(HUMAN)
-    spec = new_spec("pad", timestep_s=timestep, gravity_m_s2=0.0)
-    seg = spec.worldbody.add_body(name="segment")
-    seg.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
-                 mass=1.0, contype=0, conaffinity=0)
-    joint = seg.add_joint(name="mount", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-    joint.stiffness, joint.damping = [1e5, 0.0, 0.0], [50.0, 0.0, 0.0]
-    seg.add_geom(name="skin", type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.009, 0.01, 0],
-                 quat=[0.7071068, 0.7071068, 0, 0], contype=0, conaffinity=0, mass=0.0)
-    add_hand_pad(spec, "skin", cal.law, outward=(0.0, 0.0, -1.0 if behind else 1.0),
-                 settings=HandPad())
-    plate = spec.worldbody.add_body(name="plate", pos=[0, 0, 0.011], mocap=True)
-    plate.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.02, 0.02, 0.002],
-                   contype=0, conaffinity=0)
-    spec.add_pair(name="skin_plate", geomname1="skin", geomname2="plate", condim=3)
-    model = spec.compile()
-    apply_pair_law(model, "skin_plate", tissue.soft_contact)
-    data = mujoco.MjData(model)
-    depth = 1e-3 * (tissue.law.elastic.displacement_at(force_N)
-                    + (0.0 if behind else cal.law.elastic.displacement_at(force_N)))
-    q = model.joint("skin_pad").qposadr[0]
-    z0 = model.body_pos[model.body("plate").id, 2]
-    n = int((0.3 + hold_s) / timestep)
-    x, f, resets, f6 = np.empty(n), np.empty(n), 0, np.zeros(6)
-    for k in range(n):
-        data.mocap_pos[0, 2] = z0 - depth * min((k + 1) * timestep / 0.3, 1.0)
-        t = data.time
-        mujoco.mj_step(model, data)
-        resets += data.time < t
-        x[k], f[k] = 1e3 * data.qpos[q], 0.0
-        for i in range(data.ncon):
-            mujoco.mj_contactForce(model, data, i, f6)
-            f[k] += f6[0]
-    return x, f, resets
+    """The shared pad press (tests/pad_rig.py) on a 1 kg segment (its mount stable at every
+    allowed timestep): the pad's compression (mm), contact force (N) and MuJoCo's resets."""
+    p = press_pad(design, timestep=timestep, force_N=force_N, hold_s=hold_s, segment_kg=1.0,
+                  behind=behind)
+    return p.x, p.f, p.resets
 
 
 def test_a_pad_pushed_from_behind_stays_at_its_rest():

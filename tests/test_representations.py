@@ -8,9 +8,8 @@ import warnings
 import mujoco
 import numpy as np
 import pytest
+from pad_rig import press_pad
 
-from softhand.hands.skeleton import new_spec
-from softhand.laws.references import HUMAN
 from softhand.skin.files import load_calibration, shipped_skins
 from softhand.skin.representations import (
     REPRESENTATIONS,
@@ -19,7 +18,6 @@ from softhand.skin.representations import (
     add_hand_pad,
     get_representation,
 )
-from softhand.skin.rig import apply_pair_law
 
 
 def test_registry_has_every_representation_once_and_rejects_unknown_names():
@@ -41,47 +39,11 @@ def test_every_calibrated_representation_round_trips_through_its_class(skin):
         assert cal.params(name) == params
 
 
-def _pressed_pad(design: str, *, timestep: float = 0.002, hold_s: float = 2.0,
-                 settings: HandPad | None = None):
-    """A hand pad of ``design`` on a body held by a stiff spring, pressed by a plate through
-    human tissue (the tissue's calibrated soft contact) to about 3 N in 0.3 s and held, under
-    the hand's implicitfast integrator. Returns time, pad compression (mm), contact force (N) and
-    how many times MuJoCo found the simulation unstable (and reset it)."""
-    cal = load_calibration(design)
-    tissue = load_calibration(HUMAN).soft_contact
-    spec = new_spec("hand_pad", timestep_s=timestep, gravity_m_s2=0.0)  # the hands' options
-    seg = spec.worldbody.add_body(name="segment")
-    seg.add_geom(name="bone", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.004, 0.006, 0.001],
-                 mass=0.05, contype=0, conaffinity=0)
-    joint = seg.add_joint(name="mount", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-    joint.stiffness, joint.damping = [1e5, 0.0, 0.0], [50.0, 0.0, 0.0]
-    seg.add_geom(name="skin", type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.009, 0.01, 0],
-                 quat=[0.7071068, 0.7071068, 0, 0], contype=0, conaffinity=0, mass=0.0)
-    add_hand_pad(spec, "skin", cal.law, outward=(0.0, 0.0, 1.0), settings=settings or HandPad())
-    plate = spec.worldbody.add_body(name="plate", pos=[0, 0, 0.011], mocap=True)
-    plate.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.02, 0.02, 0.002],
-                   contype=0, conaffinity=0)
-    spec.add_pair(name="skin_plate", geomname1="skin", geomname2="plate", condim=3)
-    model = spec.compile()
-    apply_pair_law(model, "skin_plate", tissue)
-    data = mujoco.MjData(model)
-    depth = 1e-3 * (load_calibration(HUMAN).law.elastic.displacement_at(2.0)
-                    + cal.law.elastic.displacement_at(2.0))
-    q = model.joint("skin_pad").qposadr[0]
-    z0 = model.body_pos[model.body("plate").id, 2]
-    n = int((0.3 + hold_s) / timestep)
-    t, x, f = np.empty(n), np.empty(n), np.empty(n)
-    f6 = np.zeros(6)
-    for k in range(n):
-        t[k] = (k + 1) * timestep
-        data.mocap_pos[0, 2] = z0 - depth * min(t[k] / 0.3, 1.0)
-        mujoco.mj_step(model, data)
-        x[k] = 1e3 * data.qpos[q]
-        f[k] = 0.0
-        for i in range(data.ncon):
-            mujoco.mj_contactForce(model, data, i, f6)
-            f[k] += f6[0]
-    return cal.law, t, x, f, int(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+def _pressed_pad(design: str, *, hold_s: float = 2.0, settings: HandPad | None = None):
+    """(law, time, compression mm, contact force N, bad-acceleration warnings) of the shared
+    pad press (tests/pad_rig.py) at 2 ms to about 3 N (the depth of 2 N through each layer)."""
+    p = press_pad(design, hold_s=hold_s, settings=settings)
+    return p.law, p.t, p.x, p.f, p.badqacc
 
 
 @pytest.mark.parametrize("design", ["pocket2-pu", "pocket2-sil", "solid-pu", "prosthetic-102l"])
