@@ -207,9 +207,10 @@ def fe() -> None:
                    "completes).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
-    """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate."""
+    """Indent DESIGN (e.g. pocket2-sil, solid-pu-sil) with a rigid plate, cylinder or sphere."""
     from dataclasses import replace
 
+    from softhand.fem.indenter import parse_indenter
     from softhand.fem.solver import ConvergenceError, Status, indent
     from softhand.fem.sweep import write_results
     from softhand.io import staged_folder
@@ -217,6 +218,10 @@ def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
     (name,) = designs_of([design])
     settings = make_settings([name], **kw)
     sensors = parse_sensors(sensor_items, name, settings.geometry)
+    if sensors and parse_indenter(settings.indenter).full_model:
+        bad(f"--sensor with --indenter {settings.indenter!r}: embedded sensors are read on the "
+            "quarter model only (cylinder angles 0 and 90, sphere, plate); this angle runs the "
+            "full model")
     if sensors is not None:
         settings = replace(settings, sensors=sensors)
     out = checked_dir(out_dir, "--out", force=force, need_bytes=_FE_BYTES)
@@ -249,11 +254,13 @@ def _print_result(s: dict[str, Any]) -> None:
     def fmt(v, unit):
         return "not reached" if v is None else f"{v:.3f} {unit}"
 
-    click.echo(f"design {s['design']} ({s['mode']}, mesh {s['mesh']}, moduli {s['moduli']})")
-    ref = displacement_at_2n(s["design"])
+    plate = s.get("indenter", "plate") == "plate"  # the paper's numbers are the plate's
+    click.echo(f"design {s['design']} ({s['mode']}, mesh {s['mesh']}, moduli {s['moduli']}"
+               + ("" if plate else f", indenter {s['indenter']}") + ")")
+    ref = displacement_at_2n(s["design"]) if plate else None
     click.echo(f"  displacement at 2 N : {fmt(s['displacement_at_2N_mm'], 'mm')}"
                + (f"   (paper {ref} mm)" if ref else ""))
-    ref = force_at_2mm(s["design"])
+    ref = force_at_2mm(s["design"]) if plate else None
     click.echo(f"  force at 2 mm       : {fmt(s['force_at_2mm_N'], 'N')}"
                + (f"   (paper {ref} N)" if ref else ""))
     click.echo(f"  peak / after hold   : {s['peak_force_N']:.3f} N / {s['relaxed_force_N']:.3f} N")
@@ -344,6 +351,9 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
                                         plot=not batch.interrupted)  # stop fast: no plot
                 if not missing:
                     staged.commit()
+            if settings.indenter != "plate":
+                click.echo(f"note: indenter {settings.indenter}; the paper's numbers below are "
+                           "the plate's")
             click.echo(paper_error_table(summary))
     _end_of_batch("designs", len(batch.results), len(names), out, missing, batch.interrupted,
                   staged=shipped and not staged.committed)
@@ -365,9 +375,14 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
 def fe_export(design, out, fmt, depth_mm, **kw) -> None:
     """Write DESIGN as an Abaqus (.inp) or CalculiX (.inp) input deck to OUT."""
     from softhand.fem.abaqus import write_deck
+    from softhand.fem.indenter import parse_indenter
 
     (name,) = designs_of([design])
     settings = make_settings([name], **kw)
+    if parse_indenter(settings.indenter).full_model:
+        bad(f"--indenter {settings.indenter!r}: the decks are the quarter model (symmetry "
+            "planes x = 0, z = 0); a cylinder at another angle than 0 or 90 deg runs on "
+            "softhand's full model and is not exported: allowed angles 0 and 90")
     path = checked_file(out, "OUT", ".inp")
     with progress_bar(f"{name}: plate travel", disable=depth_mm is not None) as progress:
         try:

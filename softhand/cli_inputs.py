@@ -159,6 +159,32 @@ _OPT_GEOMETRY = click.option("--geometry", multiple=True, metavar="KEY=VALUE",
 _OPT_MATERIALS = click.option("--materials", "materials_path",
                               help="JSON file with material constants replacing Table 3, "
                                    "e.g. {\"sil\": {\"mu_MPa\": [0.08, 0.01]}}.")
+
+
+class IndenterText(click.ParamType):
+    """An indenter: plate, cylinder:R_MM[@ANGLE_DEG] or sphere:R_MM (canonical text out)."""
+
+    name = "indenter"
+
+    def convert(self, value, param, ctx):
+        from softhand.fem.indenter import parse_indenter
+
+        try:
+            return parse_indenter(value).text
+        except ValueError as exc:
+            self.fail(f"{value!r}: {str(exc).split(': ', 1)[-1]}", param, ctx)
+
+
+_OPT_INDENTER = click.option(
+    "--indenter", type=IndenterText(), default="plate", show_default=True,
+    metavar="plate|cylinder:R_MM[@ANGLE_DEG]|sphere:R_MM",
+    help="Rigid indenter: the paper's plate, a cylinder of radius R in (0, 1000] mm with its "
+         "axis at ANGLE_DEG in [0, 90] from the phalanx axis (0: along it, 90: across it, the "
+         "default; other angles run the full phalanx, 4x the elements, no embedded sensors, "
+         "not exportable), or a sphere of radius R in (0, 1000] mm. 2d takes the plate and "
+         "cylinder:R@0 only.")
+
+
 def cpus_allowed(ctx, param, value):
     """--threads / --workers: at most the CPUs this process may run on (more only queue)."""
     from softhand.parallel import available_cpus
@@ -175,10 +201,10 @@ OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None
                                  "most 4]. One FE run: element threads; a sweep or calibration: "
                                  "designs or skins at once. BLAS stays single-threaded.")
 
-FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
-              _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
-EXPORT_OPTIONS = (_OPT_MESH, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED, _OPT_FORCE,
-                  _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
+FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
+              _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
+EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,
+                  _OPT_FORCE, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 
 
 def with_options(options):
@@ -240,8 +266,14 @@ def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **
     from dataclasses import replace
 
     from softhand.fem.geometry import parse_design
+    from softhand.fem.indenter import parse_indenter
     from softhand.fem.solver import IndentationSettings
 
+    indenter = kw.get("indenter", "plate")
+    try:
+        parse_indenter(indenter).check_mode(mode)
+    except ValueError as exc:
+        bad(f"--indenter {indenter!r} with --mode {mode}: {str(exc).split(': ', 1)[-1]}")
     try:
         settings = IndentationSettings(mode=mode, **kw)
     except ValueError as exc:  # the option types already checked each number

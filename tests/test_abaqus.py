@@ -458,3 +458,37 @@ def test_hold_and_speed_set_the_steps(hold: float, speed: float, elastic: bool,
     assert [float(b.data[0][1]) for b in proc] == pytest.approx(list(steps.values()))
     assert bool(find(blocks, "VISCOELASTIC")) is not elastic
     assert plate_travel_in(blocks) == [-DEPTH] * len(steps)
+
+
+@pytest.mark.parametrize("indenter, kind, rows", [
+    # sphere: centre and a point above it on the vertical axis; quarter circle equator -> bottom
+    ("sphere:7.4", "REVOLUTION", [["0.", "16.4", "0.", "0.", "17.4", "0."], ["START", "7.4", "0."],
+                                  ["CIRCL", "0.", "-7.4", "0.", "0."]]),
+    # across the phalanx: local x = Z, generator X; lower half circle clockwise in (Z, -Y)
+    ("cylinder:7.4@90", "CYLINDER", [["0.", "16.4", "0.", "0.", "16.4", "1."],
+                                     ["1.", "16.4", "0."], ["START", "-7.4", "0."],
+                                     ["CIRCL", "0.", "7.4", "0.", "0."],
+                                     ["CIRCL", "7.4", "0.", "0.", "0."]]),
+    # along the phalanx: local x = X, generator Z; lower half circle clockwise in (X, Y)
+    ("cylinder:10.7@0", "CYLINDER", [["0.", "19.7", "0.", "1.", "19.7", "0."],
+                                     ["0.", "19.7", "1."], ["START", "10.7", "0."],
+                                     ["CIRCL", "0.", "-10.7", "0.", "0."],
+                                     ["CIRCL", "-10.7", "0.", "0.", "0."]]),
+])
+def test_round_indenters_are_analytical_rigid_surfaces_touching_the_top(indenter, kind, rows):
+    """Radius and centre (height 9 + R above the base: the lowest point on the skin's top)."""
+    text = inp_text("solid-pu", IndentationSettings(mesh="coarse", indenter=indenter),
+                    depth_mm=DEPTH)
+    assert f"{indenter} indentation of solid-pu" in text
+    blocks = parse(text)
+    surf = one(blocks, "SURFACE", NAME="INDENTER")
+    assert surf.params["TYPE"] == kind
+    assert surf.data == rows
+    assert not find(blocks, "SURFACE", NAME="PLATE")
+    rigid = one(blocks, "RIGID BODY")
+    assert rigid.params == {"ANALYTICAL SURFACE": "INDENTER", "REF NODE": "PLATE_RP"}
+    assert one(blocks, "CONTACT PAIR").data == [["SKIN", "INDENTER"]]
+    bc = [r for b in find(blocks, "BOUNDARY") for r in b.data if r[:3] == ["PLATE_RP", "2", "2"]]
+    assert [float(r[3]) for r in bc] == [-DEPTH, -DEPTH]
+
+

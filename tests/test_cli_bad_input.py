@@ -256,3 +256,22 @@ def test_fe_curve_cut_at_a_row_boundary_is_caught_by_its_recorded_hash(tmp_path)
     rejected(["calibrate", "solid-pu", "--fe-dir", str(fe), "--out", str(tmp_path / "out")],
              "--fe-dir", "solid-pu.csv", "sha256", "changed or truncated")
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("args, needles", [
+    (["fe", "indent", "solid-pu", "--indenter", "cone:3"],
+     ["'--indenter'", "'cone:3'", "cylinder:R_MM[@ANGLE_DEG]", "(0, 1000] mm"]),
+    (["fe", "indent", "solid-pu", "--indenter", "sphere:0"], ["'sphere:0'", "(0, 1000] mm"]),
+    (["fe", "sweep", "--indenter", "cylinder:2000"], ["'cylinder:2000'", "(0, 1000] mm"]),
+    (["fe", "indent", "solid-pu", "--indenter", "cylinder:5@120"], ["'cylinder:5@120'", "[0, 90]"]),
+    (["fe", "indent", "solid-pu", "--hold", "0", "--indenter", "cylinder:5@45", "--sensor", "bone"],
+     ["--sensor with --indenter 'cylinder:5@45'", "quarter model only"]),
+    (["fe", "export", "solid-pu", "x.inp", "--indenter", "cylinder:5@45"],
+     ["--indenter 'cylinder:5@45'", "allowed angles 0 and 90", "full model"]),
+    (["fe", "indent", "solid-pu", "--mode", "2d", "--indenter", "sphere:5"],
+     ["--indenter 'sphere:5' with --mode 2d", "plane-strain", "cylinder:R@0"]),
+    (["fe", "export", "solid-pu", "x.inp", "--indenter", "sphere:5@90"],
+     ["'--indenter'", "takes no angle"]),
+])
+def test_indenters(args, needles):
+    rejected(args, *needles)

@@ -26,6 +26,12 @@ are collapsed bricks (one face collapsed to a line); both solvers accept them. B
 y = 0 fixed, x = 0 and z = 0 symmetry planes. The force on the whole phalanx is -4 x RF2 of
 ``PLATE_RP`` (RF2 < 0: the skin pushes the plate up).
 
+Round indenters (``settings.indenter``, :mod:`softhand.fem.indenter`): Abaqus gets an analytical
+rigid surface ``INDENTER`` on ``PLATE_RP``, a cylinder (TYPE=CYLINDER, the lower half circle swept
+along the axis) or a sphere (TYPE=REVOLUTION, a quarter circle revolved about the vertical),
+touching the top of the skin at travel 0. CalculiX gets a meshed rigid one
+(:func:`softhand.fem.calculix.indenter_grid`).
+
 Plate travel: Abaqus/Standard cannot end a displacement-controlled step at a force, so the ramp
 goes to a depth that is either given or softhand's own displacement at ``max_force_N`` for the
 same model (:func:`write_deck` runs :func:`indent`); the hold keeps that depth, as softhand does.
@@ -46,6 +52,7 @@ import numpy as np
 
 import softhand
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
+from softhand.fem.indenter import Indenter, parse_indenter
 from softhand.fem.materials import Material, material
 from softhand.fem.mesh import Mesh, build_mesh
 from softhand.fem.solver import IndentationSettings, Status, indent
@@ -233,6 +240,10 @@ def _prepare(design: str | Design, settings: IndentationSettings | None, dialect
         raise ValueError(f"mode = {s.mode!r}: only the 3D quarter model ('3d') is exportable")
     if dialect not in DIALECTS:
         raise ValueError(f"dialect = {dialect!r}: allowed {', '.join(DIALECTS)}")
+    if parse_indenter(s.indenter).full_model:
+        raise ValueError(f"indenter = {s.indenter!r}: a cylinder at an angle other than 0 or 90 "
+                         "deg runs on softhand's full model; the decks are the quarter model "
+                         "(symmetry planes x = 0, z = 0): allowed angles 0 and 90")
     if dialect == "calculix":
         s = replace(s, elastic_only=True)
     geom = design.geometry(**s.geometry)
@@ -330,8 +341,18 @@ def _header(core: _Core, dialect: str, note: str) -> list[str]:
             text.append(f"{name}: |alpha_i| < {MIN_ALPHA[dialect]:g} written as "
                         f"{MIN_ALPHA[dialect]:g} (CalculiX's hyperfoam does not converge with "
                         "alpha = 0.001; in softhand the change moves the forces by < 0.05 %).")
+    ind = parse_indenter(s.indenter)
+    if ind.kind != "plate":
+        text.append(f"indenter: {ind.text} (radius {ind.radius_mm:g} mm"
+                    + ("" if ind.angle_deg is None else
+                       f", axis at {ind.angle_deg:g} deg from the phalanx axis z") + "), "
+                    + ("" if dialect == "calculix" else "analytical ")
+                    + "rigid surface INDENTER on PLATE_RP, touching the skin's top at travel 0"
+                    + (" (CalculiX: a rigid mesh of C3D8 bricks)." if dialect == "calculix"
+                       else "."))
+    what = "plate" if ind.kind == "plate" else ind.text
     out = ["*HEADING",
-           f"softhand {version}: plate indentation of {core.design.name}; units mm, N, s, MPa",
+           f"softhand {version}: {what} indentation of {core.design.name}; units mm, N, s, MPa",
            f"** {note}"]
     for t in text:
         out += _comment(t)
@@ -393,11 +414,15 @@ def _abaqus_tail(core: _Core, depth: float) -> list[str]:
                      "margin], all z."),
            "*SURFACE, TYPE=CYLINDER, NAME=PLATE",
            f"0., {h}, 0., 1., {h}, 0.", f"0., {h}, 1.",
-           f"START, {_num(0.5 * geom.width_mm + a)}, 0.", f"LINE, {_num(-a)}, 0.",
-           "*RIGID BODY, ANALYTICAL SURFACE=PLATE, REF NODE=PLATE_RP",
-           "*SURFACE INTERACTION, NAME=FRICTIONLESS", "*FRICTION", "0.",
-           "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD",
-           "*CONTACT PAIR, INTERACTION=FRICTIONLESS", "SKIN, PLATE"]
+           f"START, {_num(0.5 * geom.width_mm + a)}, 0.", f"LINE, {_num(-a)}, 0."]
+    ind = parse_indenter(s.indenter)
+    name = "PLATE"
+    if ind.kind != "plate":
+        out, name = _round_surface(ind, geom.height_mm), "INDENTER"
+    out += [f"*RIGID BODY, ANALYTICAL SURFACE={name}, REF NODE=PLATE_RP",
+            "*SURFACE INTERACTION, NAME=FRICTIONLESS", "*FRICTION", "0.",
+            "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD",
+            "*CONTACT PAIR, INTERACTION=FRICTIONLESS", f"SKIN, {name}"]
     if core.mesh.floor_faces.size:
         out += ["** Pocket closure: roof underside against floor.",
                 "*CONTACT PAIR, INTERACTION=FRICTIONLESS", "ROOF, FLOOR"]
@@ -410,6 +435,35 @@ def _abaqus_tail(core: _Core, depth: float) -> list[str]:
         out += [f"** Hold: plate fixed at {_num(depth)} mm for {_num(s.hold_s)} s."]
         out += _abaqus_step("HOLD", proc, s.hold_s, -depth, first=False)
     return out
+
+
+def _round_surface(ind: Indenter, height_mm: float) -> list[str]:
+    """Analytical rigid cylinder or sphere of radius R whose lowest point is (0, height, 0).
+
+    As for the plate, a segment's normal is its direction turned 90 deg counterclockwise in the
+    profile plane: the arcs run clockwise, so the normal points out of the circle, at the skin.
+    """
+    R, c = _num(ind.radius_mm), _num(height_mm + ind.radius_mm)
+    r = ind.radius_mm
+    if ind.kind == "sphere":
+        return [*_comment("Sphere: a quarter circle in the local (r, z) plane, z = global Y from "
+                          "the centre, from the equator to the lowest point, revolved about Y."),
+                "*SURFACE, TYPE=REVOLUTION, NAME=INDENTER",
+                f"0., {c}, 0., 0., {_num(height_mm + r + 1.0)}, 0.",
+                f"START, {R}, 0.", f"CIRCL, 0., {_num(-r)}, 0., 0."]
+    if ind.angle_deg == 0.0:  # axis along z: local x = X, local y = Z x X = Y
+        return [*_comment("Cylinder along the phalanx (axis global Z through the centre): the "
+                          "lower half circle in the local (x, y) = (X, Y) plane, swept along Z."),
+                "*SURFACE, TYPE=CYLINDER, NAME=INDENTER",
+                f"0., {c}, 0., 1., {c}, 0.", f"0., {c}, 1.",
+                f"START, {R}, 0.", f"CIRCL, 0., {_num(-r)}, 0., 0.",
+                f"CIRCL, {_num(-r)}, 0., 0., 0."]
+    # axis along x: local x = Z, local z = X, local y = X x Z = -Y
+    return [*_comment("Cylinder across the phalanx (axis global X through the centre): the "
+                      "lower half circle in the local (x, y) = (Z, -Y) plane, swept along X."),
+            "*SURFACE, TYPE=CYLINDER, NAME=INDENTER",
+            f"0., {c}, 0., 0., {c}, 1.", f"1., {c}, 0.",
+            f"START, {_num(-r)}, 0.", f"CIRCL, 0., {R}, 0., 0.", f"CIRCL, {R}, 0., 0., 0."]
 
 
 def _render(core: _Core, dialect: str, depth: float, note: str) -> str:

@@ -20,7 +20,7 @@ import numpy as np
 from softhand.fem.elements import ReferenceElement, reference_element
 from softhand.fem.geometry import PhalanxGeometry
 
-__all__ = ["MESH_LEVELS", "Mesh", "MeshSpec", "build_mesh", "face_element"]
+__all__ = ["MESH_LEVELS", "Mesh", "MeshSpec", "build_mesh", "face_element", "full_model"]
 
 
 @dataclass(frozen=True)
@@ -271,4 +271,47 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
         outer_faces=outer_faces, roof_faces=roof_faces, floor_faces=floor_faces,
         symmetry_factor=2.0 if dim == 2 else 4.0,
         length_mm=geom.length_mm if dim == 2 else 1.0, spec=spec,
+    )
+
+
+def full_model(mesh: Mesh) -> Mesh:
+    """The whole 3D phalanx from its quarter mesh: mirrored across x = 0 and z = 0.
+
+    For loads without the quarter's symmetry (a cylinder crossing the phalanx at an angle other
+    than 0 or 90 deg). Nodes on the symmetry planes are shared; an element mirrored once has its
+    local xi2 axis reversed so that it stays right-handed; faces keep their pairing (roof row k
+    against floor row k). Only the base y = 0 is fixed; ``symmetry_factor`` is 1.
+    """
+    if mesh.dim != 3:
+        raise ValueError(f"mesh.dim = {mesh.dim!r}: the full model mirrors a 3D quarter mesh")
+    tol = 1e-9
+    on_x = np.abs(mesh.X[:, 0]) < tol
+    on_z = np.abs(mesh.X[:, 2]) < tol
+    n = mesh.X.shape[0]
+    copies = [(1, 1), (-1, 1), (1, -1), (-1, -1)]
+    keys, maps = {}, []
+    for sx, sz in copies:
+        ex = np.where(on_x, 1, sx)
+        ez = np.where(on_z, 1, sz)
+        ids = np.empty(n, dtype=np.int64)
+        for a in range(n):
+            ids[a] = keys.setdefault((a, int(ex[a]), int(ez[a])), len(keys))
+        maps.append(ids)
+    X = np.empty((len(keys), 3))
+    for (a, sx, sz), i in keys.items():
+        X[i] = mesh.X[a] * (sx, 1.0, sz)
+    flip = np.arange(27).reshape(3, 3, 3)[::-1].ravel()  # reverse xi2 (the slowest index)
+    elements, faces = [], {"outer": [], "roof": [], "floor": []}
+    for (sx, sz), ids in zip(copies, maps, strict=True):
+        conn = ids[mesh.elements]
+        elements.append(conn[:, flip] if sx * sz < 0 else conn)
+        for name in faces:
+            faces[name].append(ids[getattr(mesh, f"{name}_faces")])
+    fixed = np.flatnonzero(np.abs(X[:, 1]) < tol)
+    return Mesh(
+        dim=3, X=X, elements=np.concatenate(elements), layer=np.tile(mesh.layer, 4),
+        ref=mesh.ref, fixed=np.unique(np.concatenate([fixed * 3 + c for c in range(3)])),
+        outer_faces=np.concatenate(faces["outer"]), roof_faces=np.concatenate(faces["roof"]),
+        floor_faces=np.concatenate(faces["floor"]), symmetry_factor=1.0, length_mm=1.0,
+        spec=mesh.spec,
     )

@@ -1,6 +1,8 @@
-"""Displacement-driven plate indentation: ramp at constant speed, then hold.
+"""Displacement-driven indentation: ramp at constant speed, then hold.
 
-The plate moves down at ``speed_mm_s`` until the reaction reaches ``max_force_N`` (or the plate
+The indenter (the paper's plate by default; a cylinder or a sphere, :mod:`softhand.fem.indenter`,
+with the gap of :class:`softhand.fem.contact.RoundGaps`) is called the plate below. The plate
+moves down at ``speed_mm_s`` until the reaction reaches ``max_force_N`` (or the plate
 reaches ``max_depth_mm``), then stays put for ``hold_s`` while the skin relaxes. Each step solves
 the nonlinear equilibrium with Newton's method on the free DOFs (base fixed, symmetry planes),
 with penalty contact. Steps adapt: they grow after easy steps, are capped so that the force rises
@@ -21,10 +23,11 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from softhand.fem.assembly import Assembler, ElementError, ElementState
-from softhand.fem.contact import GapSet, plate_gaps, pocket_gaps
+from softhand.fem.contact import GapSet, RoundGaps, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
+from softhand.fem.indenter import parse_indenter
 from softhand.fem.materials import Material, Moduli, material
-from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh
+from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh, full_model
 from softhand.fem.sensors import SensorPatch, SensorReader, default_patches
 from softhand.parallel import check_threads, single_threaded_blas
 
@@ -94,6 +97,11 @@ class IndentationSettings:
             design has (:func:`softhand.fem.sensors.default_patches`); () for none.
         materials: per material name (``sil``, ``pu``), constants replacing Table 3 (keys
             ``nu``, ``mu_MPa``, ``alpha``, ``g``, ``tau_s``).
+        indenter: ``"plate"`` (the paper's), ``"cylinder:R_MM[@ANGLE_DEG]"`` or
+            ``"sphere:R_MM"`` (:mod:`softhand.fem.indenter`; stored in its canonical form, e.g.
+            ``"cylinder:7.4@90"``). Each moves as the plate does; the force is the reaction
+            along its travel. A cylinder at an angle other than 0 or 90 deg runs on the full
+            model (:func:`softhand.fem.mesh.full_model`), which reads no sensor patches.
     """
 
     mode: str = "3d"
@@ -116,10 +124,18 @@ class IndentationSettings:
     geometry: dict[str, float] = field(default_factory=dict)
     materials: dict[str, dict] = field(default_factory=dict)
     sensors: tuple[SensorPatch, ...] | None = None
+    indenter: str = "plate"
 
     def __post_init__(self) -> None:
         if self.mode not in ("3d", "2d"):
             raise ValueError(f"mode = {self.mode!r}: allowed '3d' or '2d'")
+        ind = parse_indenter(self.indenter)
+        ind.check_mode(self.mode)
+        object.__setattr__(self, "indenter", ind.text)
+        if ind.full_model and self.sensors:
+            raise ValueError(f"sensors = {self.sensors!r}: embedded sensors are read on the "
+                             f"quarter model only; indenter = {ind.text!r} runs the full model "
+                             "(allowed: None or () there)")
         if isinstance(self.mesh, str) and self.mesh not in MESH_LEVELS:
             raise ValueError(f"mesh = {self.mesh!r}: allowed {', '.join(MESH_LEVELS)}")
         for name in ("speed_mm_s", "max_force_N", "max_depth_mm", "penalty_N_mm3",
@@ -171,7 +187,8 @@ class IndentationResult:
             resolution is one point's share of a face (:meth:`GapSet.contact_area`).
         plate_pressure: the plate's contact pressure at the end of the ramp (the peak force):
             ``points_mm`` (undeformed positions of the modelled part's plate-face Gauss points,
-            x across the width, y up, z along the length in 3D), ``pressure_MPa`` at each,
+            x across the width, y up, z along the length in 3D), ``weight_mm2`` (each point's
+            undeformed area; mm in 2D), ``pressure_MPa`` at each,
             ``force_N`` and ``displacement_mm`` of that state. Empty if the ramp took no step.
     """
 
@@ -226,6 +243,7 @@ class IndentationResult:
             "mesh": s.mesh if isinstance(s.mesh, str) else asdict(s.mesh),
             "moduli": s.moduli,
             "elastic_only": s.elastic_only,
+            "indenter": s.indenter,
             "status": self.status.value,
             "displacement_at_2N_mm": self.displacement_at(2.0),
             "displacement_at_1N_mm": self.displacement_at(1.0),
@@ -266,13 +284,28 @@ def interpolate_crossing(x: np.ndarray, y: np.ndarray, level: float) -> float | 
 class _Model:
     """Mesh, assembler and contact sets of one run, with a Newton solver for one step."""
 
-    def __init__(self, design: Design, geom: PhalanxGeometry, settings: IndentationSettings):
+    def __init__(self, design: Design, geom: PhalanxGeometry, settings: IndentationSettings,
+                 mesh: Mesh | None = None):
         self.settings = settings
         mats = [_material(design.inner, settings), _material(design.outer, settings)]
-        self.mesh: Mesh = build_mesh(geom, settings.mesh_spec, dim=3 if settings.mode == "3d" else 2)
+        ind = parse_indenter(settings.indenter)
+        whole = mesh is None and ind.full_model
+        if mesh is None:
+            self.mesh: Mesh = build_mesh(geom, settings.mesh_spec,
+                                         dim=3 if settings.mode == "3d" else 2)
+            top = geom.height_mm
+            if whole:
+                self.mesh = full_model(self.mesh)
+        else:
+            self.mesh, top = mesh, float(mesh.X[:, 1].max())
         self.asm = Assembler(self.mesh, mats, threads=settings.threads)
         n_gauss = settings.contact_points
-        self.plate: GapSet = plate_gaps(self.mesh, geom.height_mm, n_gauss)
+        self.plate: GapSet | None = None
+        self.round: RoundGaps | None = None
+        if ind.kind == "plate":
+            self.plate = plate_gaps(self.mesh, top, n_gauss)
+        else:
+            self.round = RoundGaps(self.mesh, top, ind.radius_mm, ind.axis, n_gauss)
         self.pocket: GapSet | None = pocket_gaps(self.mesh, n_gauss)
         free = np.ones(self.mesh.n_dofs, dtype=bool)
         free[self.mesh.fixed] = False
@@ -280,6 +313,8 @@ class _Model:
         self.scale = self.mesh.symmetry_factor * self.mesh.length_mm
         self.penalty = settings.penalty_N_mm3
         patches = default_patches(geom) if settings.sensors is None else settings.sensors
+        if mesh is not None or whole:
+            patches = ()  # sensor patches are placed on the phalanx's quarter mesh only
         self.sensors = SensorReader(self.mesh, geom, patches, n_gauss, self.penalty)
 
     def read_sensors(self, u: np.ndarray) -> dict[str, float]:
@@ -289,16 +324,27 @@ class _Model:
         gaps = self.pocket.gaps(u) if self.pocket is not None else None
         return self.sensors.read(outer, internal, gaps)
 
+    def contact(self, u: np.ndarray, d: float) -> tuple[GapSet, float]:
+        """The indenter's gap set at state u (linearised there for a round indenter), and the
+        shift that places it at travel d."""
+        if self.plate is not None:
+            return self.plate, -d
+        return self.round.linearised(u, d), 0.0
+
     def plate_force(self, u: np.ndarray, d: float) -> float:
-        return self.plate.force(u, self.penalty, -d) * self.scale
+        if self.plate is not None:
+            return self.plate.force(u, self.penalty, -d) * self.scale
+        return self.round.force(u, d, self.penalty) * self.scale
 
     def plate_area(self, u: np.ndarray, d: float) -> float:
         """Contact area on the whole phalanx, mm^2 (2D: the contact width times the length)."""
-        return self.plate.contact_area(u, -d) * self.scale
+        gaps, shift = self.contact(u, d)
+        return gaps.contact_area(u, shift) * self.scale
 
     def plate_pressure(self, u: np.ndarray, d: float, F: float) -> dict[str, Any]:
-        return {"points_mm": self.plate.points.copy(),
-                "pressure_MPa": self.plate.pressure(u, self.penalty, -d),
+        gaps, shift = self.contact(u, d)
+        return {"points_mm": gaps.points.copy(), "weight_mm2": gaps.weight.copy(),
+                "pressure_MPa": gaps.pressure(u, self.penalty, shift),
                 "force_N": F, "displacement_mm": d}
 
     def newton(self, u0: np.ndarray, state: ElementState, dt: float, d: float, tol_N: float):
@@ -307,7 +353,8 @@ class _Model:
         history: list[float] = []
         for it in range(1, self.settings.max_newton + 1):
             f, tangent_of, new_state = self.asm.evaluate(u, state, dt)
-            rp, Kp, n_plate = self.plate.add(u, self.penalty, -d)
+            gaps, shift = self.contact(u, d)
+            rp, Kp, n_plate = gaps.add(u, self.penalty, shift)
             f += rp
             n_pocket, Kc = 0, None
             if self.pocket is not None:
@@ -360,13 +407,18 @@ def indent(
     settings: IndentationSettings | None = None,
     *,
     progress: Callable[[float], None] | None = None,
+    mesh: Mesh | None = None,
 ) -> IndentationResult:
-    """Indent one design with a rigid plate and return its force-displacement-time curve.
+    """Indent one design with a rigid indenter and return its force-displacement-time curve.
 
     Args:
         design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
-        settings: run settings (defaults: 3D, default mesh, 0.5 mm/s to 2 N, 10 s hold).
+        settings: run settings (defaults: 3D, default plate, mesh, 0.5 mm/s to 2 N, 10 s hold).
         progress: called with the fraction done (0..1) after each accepted step.
+        mesh: a prebuilt mesh instead of the design's phalanx (e.g. the test block of
+            :func:`softhand.fem.block.block_mesh`): the design then only names the materials
+            (layer 0 inner, 1 outer), the indenter starts at the mesh's highest node, and no
+            sensor patches are read. Its dimension must match ``settings.mode``.
 
     Raises:
         ValueError: unknown design or invalid settings/geometry (before any work is done).
@@ -376,8 +428,10 @@ def indent(
     design = parse_design(design) if isinstance(design, str) else design
     s = settings or IndentationSettings()
     geom = design.geometry(**s.geometry)
+    if mesh is not None and mesh.dim != (3 if s.mode == "3d" else 2):
+        raise ValueError(f"mesh of dimension {mesh.dim} does not match mode = {s.mode!r}")
     with single_threaded_blas():  # the element threads own the cores (softhand.parallel)
-        model = _Model(design, geom, s)
+        model = _Model(design, geom, s, mesh)
         try:
             return _run(design, s, model, t_start, progress)
         finally:

@@ -162,6 +162,7 @@ def _settings_of(settings: IndentationSettings | dict[str, Any]) -> dict[str, An
     import json
 
     data = settings if isinstance(settings, dict) else asdict(settings)
+    data = {"indenter": "plate", **data}  # folders written before indenters hold plate curves
     return {k: v for k, v in json.loads(json.dumps(data, default=str)).items() if k != "threads"}
 
 

@@ -110,6 +110,7 @@ def check_fe_folders(root: str | Path) -> dict[str, dict | None]:
         if data is None:
             continue
         settings = {k: v for k, v in data["provenance"]["settings"].items() if k != "threads"}
+        settings.setdefault("indenter", "plate")  # written before indenters: plate curves
         path = root / sub / "summary.json"
         if settings.get("speed_mm_s") != FE_SPEED_FOLDERS[sub]:
             raise ValueError(f"{path}: its curves were run at speed_mm_s = "
