@@ -416,6 +416,7 @@ def plate_travel_in(blocks: list[Block]) -> list[float]:
             if r[:3] == ["PLATE_RP", "2", "2"]]
 
 
+@pytest.mark.slow
 def test_max_force_sets_the_travel_to_softhands_displacement(tmp_path) -> None:
     """No depth: the ramp goes to softhand's own d(max_force_N) for the same (viscous) model."""
     s = IndentationSettings(mesh="coarse", max_force_N=1.0, hold_s=3.0)

@@ -35,6 +35,7 @@ def test_indent_json_has_the_contract_keys(tmp_path):
     assert (tmp_path / "solid-pu.csv").read_text().startswith("time_s,displacement_mm,force_N")
 
 
+@pytest.mark.slow
 def test_flex_press_json_reports_force_area_and_pressure():
     res = run(["skin", "flex-press", "--design", "solid-pu", "--speed", "5", "--posture",
                "flexed", "--json"])
@@ -48,6 +49,7 @@ def test_flex_press_json_reports_force_area_and_pressure():
     assert len(data["force_N"]) == len(data["indentation_mm"]) == len(data["time_s"])
 
 
+@pytest.mark.slow
 def test_sweep_writes_curves_summary_and_plot(tmp_path):
     """fe sweep on two designs: one CSV each, summary.json with the paper comparison, a PNG."""
     res = run(["fe", "sweep", *FAST, "--design", "solid-sil", "--design", "solid-sil-pu",
@@ -60,6 +62,7 @@ def test_sweep_writes_curves_summary_and_plot(tmp_path):
     assert not list(tmp_path.glob(".*.tmp"))
 
 
+@pytest.mark.slow
 def test_export_writes_an_abaqus_deck(tmp_path):
     """fe export writes a deck with the hyperfoam material and the travel softhand found."""
     out = tmp_path / "deck.inp"

@@ -227,6 +227,7 @@ def test_an_episode_cut_short_warns_on_reset_and_close_at_the_callers_line():
         assert str(caught[0].message).startswith(f"episode cut short by {end}() at t = 1.6")
 
 
+@pytest.mark.slow
 def test_a_timestep_outside_the_calibrated_range_warns_once_at_the_callers_line():
     """5 ms: every skin pair is outside the checked timesteps and some oscillate faster than the
     step follows. Before, one SkinRangeWarning per pair (383) attributed to softhand's skins.py;

@@ -110,6 +110,7 @@ def test_hard_case_controller_slams_the_fingers_closed_at_full_speed():
 
 
 @pytest.mark.parametrize("timestep_s", [0.0005, 0.001, 0.002])
+@pytest.mark.slow
 def test_hard_case_timesteps_half_to_two_milliseconds(timestep_s):
     env = HandshakeEnv(timestep_s=timestep_s)
     assert env.frame_skip == round(0.01 / timestep_s)  # actions stay at 100 Hz
@@ -117,6 +118,7 @@ def test_hard_case_timesteps_half_to_two_milliseconds(timestep_s):
 
 
 @pytest.mark.parametrize("controller", ["neutral", "open-loop", "force"])
+@pytest.mark.slow
 def test_default_timestep_reproduces_half_a_millisecond(controller):
     """The 2 ms default against 0.5 ms, same partner and controller: every region's mean force
     within 0.35 N and the summed mean forces within 8 % (measured at seed 1 for the whole-hand
@@ -184,6 +186,7 @@ def test_ellipsoid_mean_curvature_radius_at_its_flattest_pole():
     assert mean_curvature_radius(model, 0) == pytest.approx(0.032)
 
 
+@pytest.mark.slow
 def test_force_accounting_adds_up_and_follows_the_skins():
     """Classes add up to the total; rigid regions carry no skin law; a skin run does."""
     from softhand.envs.run import ACCOUNT_CLASSES
@@ -199,6 +202,7 @@ def test_force_accounting_adds_up_and_follows_the_skins():
     assert 0.0 <= skin["unsensed_skin_Ns"] <= skin["skin_law_Ns"] + 1e-12
 
 
+@pytest.mark.slow
 def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_a_person():
     """The default handshake (seed 0, pocket2-sil, neutral) in the grasp solved from its contacts:
     all the force between the hands through a skin x tissue law inside its calibrated range
@@ -308,6 +312,7 @@ def test_contact_beyond_the_calibrated_range_warns_once_per_episode():
                if issubclass(w.category, CalibratedRangeWarning))
 
 
+@pytest.mark.slow
 def test_shipped_mjcf_is_the_simulated_model():
     """models/mjcf/handshake_scene.xml, loaded by plain MuJoCo and fed the env's inputs, gives the
     env's region forces (skin and bone sensors) at every step (to 1e-9 N): the skin laws are in
@@ -385,6 +390,7 @@ def test_bone_bottoming_out_under_a_region_is_in_its_reading():
     assert at["reward_terms"]["overload"] < 0.0
 
 
+@pytest.mark.slow
 def test_human_hand_runs_the_papers_protocol_whatever_the_action():
     """hand="human": human tissue on every region (the human law in series with the partner's),
     soft position servos instead of motors, surface sensors; the relaxed hand follows its own

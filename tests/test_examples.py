@@ -17,6 +17,7 @@ def _load(name: str):
     return module
 
 
+@pytest.mark.slow
 def test_fe_indent_example(capsys):
     """The pocket makes the phalanx softer: d(2 N) pocket2 > 2 mm > solid, printed per design."""
     out = _load("fe_indent").main("2d", "coarse")

@@ -173,6 +173,7 @@ def test_full_model_mirrors_the_quarter():
     assert f.symmetry_factor == 1.0
 
 
+@pytest.mark.slow
 def test_plate_on_the_full_model_equals_the_quarter():
     """Same curve from the whole phalanx as from its quarter x 4 (coarse, 0.4 mm): 1e-4."""
     base = dict(mesh="coarse", elastic_only=True, hold_s=0.0, max_depth_mm=0.4, threads=1,

@@ -117,6 +117,7 @@ def test_duplicate_names_are_refused():
             SensorPatch("bone"), SensorPatch("bone", width_mm=2.0))))
 
 
+@pytest.mark.slow
 def test_cli_json_has_the_embedded_sensors_aligned_with_time():
     res = CliRunner().invoke(main, ["fe", "indent", "pocket2-pu", "--mode", "2d", "--hold", "0.5",
                                     "--json"])

@@ -63,6 +63,7 @@ def test_pocket_closes_under_20_newton_without_failure():
     assert closed_stiffness > 10 * open_stiffness
 
 
+@pytest.mark.slow
 def test_plate_at_100_mm_per_s_is_stiffer_for_the_viscous_pu():
     """100 mm/s vs 0.5 mm/s: finite, and PU needs less travel to reach 2 N (less relaxation)."""
     fast = indent("pocket2-pu", IndentationSettings(speed_mm_s=100.0, hold_s=1.0, **S2D))

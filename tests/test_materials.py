@@ -306,6 +306,7 @@ def test_moduli_interpretation(name):
 
 # --- 7. ramp vs convolution integral and consistent tangent -----------------------------------
 @pytest.mark.parametrize("name", NAMES)
+@pytest.mark.slow
 def test_ramp_matches_convolution(name):
     """Ramp-hold E11 to 1e-4: S = int g(t-s) dS0/ds ds (quad) rel 1e-3; D = dS/dE by FD rel 1e-6."""
     mat = material(name, moduli="long-term")

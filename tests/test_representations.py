@@ -89,6 +89,7 @@ def test_hand_pad_bad_input_names_the_value():
         add_hand_pad(spec, "g", law, outward=(0, 0, 0), settings=HandPad())
 
 
+@pytest.mark.slow
 def test_relaxation_on_the_hand_runs_a_handshake_and_is_the_written_mjcf():
     """A PU design with relaxation pads on every region: a full handshake, finite, no bone on
     bone; the pads' own force follows the QLV law at their compression within 30 % of the held

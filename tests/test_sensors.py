@@ -89,6 +89,7 @@ def test_tabulated_share_is_the_spline_to_ten_micronewtons():
         assert np.abs(_Share(law)(u) - law.share.force(u)).max() < 1e-5
 
 
+@pytest.mark.slow
 def test_fit_recovers_a_known_law():
     truth = _law(dead=0.37, slope=0.3, c=(0.08,), tau=(2.0,))
     t = np.concatenate([np.linspace(0, 8, 161), 8 + np.geomspace(0.01, 10, 60)])
@@ -377,6 +378,7 @@ def test_sensors_calibrate_guards_the_shipped_laws_and_checks_records_first(tmp_
             assert n in line, (n, line)
 
 
+@pytest.mark.slow
 def test_sensors_calibrate_fit_only_writes_the_same_laws(tmp_path):
     """Refitting from a copy of the shipped records reproduces the shipped laws (one design)."""
     import shutil

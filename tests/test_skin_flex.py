@@ -67,6 +67,7 @@ def test_bad_rig_arguments_raise():
         simulate_flex_indentation(FlexPadParams(**COARSE), depth_mm=9.0)
 
 
+@pytest.mark.slow
 def test_doubling_young_doubles_force_in_the_linear_regime():
     delta = np.array([0.05, 0.1, 0.15, 0.2])
     forces = [simulate_flex_indentation(FlexPadParams(young_Pa=e), depth_mm=0.25).force_at(delta)
