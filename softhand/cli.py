@@ -55,10 +55,12 @@ from softhand.cli_inputs import (
     EXIT_INPUT,
     EXPORT_OPTIONS,
     FE_OPTIONS,
+    OPT_CLUSTER,
     OPT_THREADS,
     SENSOR_OPTIONS,
     Number,
     bad,
+    check_threads_or_cluster,
     checked_dir,
     checked_file,
     cpus_allowed,
@@ -325,15 +327,17 @@ def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[
 @click.option("--out", "out_dir", default=str(FE_DIR), show_default=True,
               help="Folder for curves, summary.json and curves.png.")
 @click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
+@OPT_CLUSTER
 @click.option("--force", is_flag=True,
               help="Allow writing into the shipped calibration/ (replaced only when the run "
                    "completes).")
-def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
+def fe_sweep(out_dir, designs, cluster, force, threads, **kw) -> None:
     """Indent all 12 designs and compare them with the paper."""
     from softhand.fem.geometry import DESIGNS
     from softhand.fem.sweep import paper_error_table, run_sweep, write_results
     from softhand.io import interrupts_deferred, staged_folder
 
+    check_threads_or_cluster(threads, cluster)
     names = designs_of(dict.fromkeys(designs or DESIGNS))
     settings = make_settings(names, threads=None, **kw)
     shipped = out_dir is not None and is_shipped(out_dir)
@@ -341,7 +345,7 @@ def fe_sweep(out_dir, designs, force, threads, **kw) -> None:
                       need_bytes=_FE_BYTES + (_folder_bytes(out_dir) if shipped else 0))
     _check_fe_folder(out, settings, names)
     with staged_folder(out, stage=shipped) as staged:
-        batch = run_sweep(names, settings, threads=threads)
+        batch = run_sweep(names, settings, threads=threads, cluster=cluster)
         missing = {n: "interrupted" for n in batch.missing}
         missing.update({n: str(e) for n, e in batch.errors.items()})
         if batch.results:
@@ -404,18 +408,22 @@ def fe_export(design, out, fmt, depth_mm, **kw) -> None:
               help="Folder for the calibration files.")
 @click.option("--fe-dir", default=str(FE_DIR), show_default=True,
               help="Folder with the FE curves (as written by `softhand fe sweep`).")
-@with_options((OPT_THREADS,))
+@with_options((OPT_THREADS, OPT_CLUSTER))
 @click.option("--force", is_flag=True,
               help="Allow writing into the shipped calibration/ (replaced only when the run "
                    "completes).")
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
-def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) -> None:
-    """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references)."""
+def calibrate(skins, representations, out_dir, fe_dir, threads, cluster, force, as_json) -> None:
+    """Fit laws and MuJoCo parameters for SKINS (default: the 12 designs and 2 references).
+
+    With --cluster, the workers read the FE curves from --fe-dir: a folder they see at the same
+    path (a shared file system, or a cluster on this machine)."""
     from softhand.io import staged_folder
     from softhand.skin.calibrate import fe_curves, skin_names
     from softhand.skin.representations import REPRESENTATIONS
     from softhand.skin.run import calibrate_many, summary_table
 
+    check_threads_or_cluster(threads, cluster)
     known = skin_names()
     names = list(dict.fromkeys(skins)) or known
     for n in names:
@@ -446,7 +454,7 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, force, as_json) 
     with staged_folder(out, stage=shipped) as staged, _writing(
             out, "the skin files written before the failure"):
         run = calibrate_many(names, reps, out_dir=staged.path, fe_dir=fe_dir, threads=threads,
-                             show_progress=not as_json)
+                             cluster=cluster, show_progress=not as_json)
         if run.index is not None and not run.missing:
             staged.commit()
     if run.index is not None:
@@ -783,10 +791,11 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
               callback=cpus_allowed,
               help="Worker processes, at most the CPUs available [default: those CPUs, at most "
                    "4].")
+@OPT_CLUSTER
 @click.option("--out", "out_dir", default="population", show_default=True,
               help="Folder for partners.json, results.json, results.csv and fig4.png.")
 @_OPT_HAND
-def population(n, seed, design, controller, threads, out_dir, hand) -> None:
+def population(n, seed, design, controller, threads, cluster, out_dir, hand) -> None:
     """The paper's handshake experiment: n sampled partners shake the hand; per-region results
     and a Fig. 4-style figure against the paper's set."""
     from softhand.envs.handshake import HandshakeEnv
@@ -796,6 +805,7 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
     from softhand.parallel import run_tasks
     from softhand.viz.population import population_figure
 
+    check_threads_or_cluster(threads, cluster, "--workers")
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     _check_hand(hand, controller, design=design)
@@ -809,7 +819,7 @@ def population(n, seed, design, controller, threads, out_dir, hand) -> None:
     done = []
     with progress_bar(f"{n} partners", disable=False) as update:
         batch = run_tasks(run_partner, [(p.index, (p, settings)) for p in partners],
-                          threads=threads,
+                          threads=threads, cluster=cluster,
                           on_done=lambda key, ok: (done.append(key), update(len(done) / n)))
     results = list(batch.results.values())
     missing = {str(k): "interrupted" for k in batch.missing}
@@ -995,16 +1005,17 @@ def sensors() -> None:
 @click.option("--design", "designs", multiple=True, help="Only these designs (repeatable).")
 @click.option("--fit-only", is_flag=True,
               help="Refit the transfer laws from the records already in --out/fe (no FE run).")
-@with_options((OPT_THREADS,))
+@with_options((OPT_THREADS, OPT_CLUSTER))
 @click.option("--force", is_flag=True,
               help="Allow writing into the shipped calibration/ (replaced only when the run "
                    "completes).")
-def sensors_calibrate(out_dir, designs, fit_only, threads, force) -> None:
+def sensors_calibrate(out_dir, designs, fit_only, threads, cluster, force) -> None:
     """Run the FE sensor records (0.5 and 2 mm/s to 20 N, 10 s hold) and fit the transfer laws."""
     from softhand.fem.geometry import DESIGNS
     from softhand.io import staged_folder
     from softhand.sensors import calibrate as cal
 
+    check_threads_or_cluster(threads, cluster)
     names = designs_of(dict.fromkeys(designs or DESIGNS))
     shipped = is_shipped(out_dir) if str(out_dir).strip() else False
     out = checked_dir(out_dir, "--out", force=force,
@@ -1019,7 +1030,8 @@ def sensors_calibrate(out_dir, designs, fit_only, threads, force) -> None:
     with staged_folder(out, stage=shipped) as staged, _writing(
             out, "the FE records written before the failure; transfer.json is the old one"):
         if not fit_only:
-            _, missing, interrupted = cal.run_sensor_fe(names, staged.path, threads=threads)
+            _, missing, interrupted = cal.run_sensor_fe(names, staged.path, threads=threads,
+                                                        cluster=cluster)
             if interrupted:
                 raise Stopped(f"interrupted ({_STOP['by']}): {kept}; missing: "
                               f"{', '.join(missing)}; no law was fitted", EXIT_INTERRUPTED)

@@ -201,6 +201,36 @@ OPT_THREADS = click.option("--threads", type=click.IntRange(min=1), default=None
                                  "most 4]. One FE run: element threads; a sweep or calibration: "
                                  "designs or skins at once. BLAS stays single-threaded.")
 
+
+def cluster_reachable(ctx, param, value):
+    """--cluster: a Dask scheduler answers at the address (before any work)."""
+    if value is None:
+        return None
+    from softhand.parallel import check_cluster
+
+    try:
+        return check_cluster(value, name="--cluster")
+    except ValueError as exc:
+        bad(str(exc))
+
+
+OPT_CLUSTER = click.option(
+    "--cluster", metavar="tcp://HOST:PORT", default=None, callback=cluster_reachable,
+    help="Run the batch on the Dask distributed scheduler at this address (tcp:// or tls://; "
+         "pip install 'softhand[cluster]'; its workers need softhand and one thread each, "
+         "`dask worker ADDRESS --nthreads 1`) instead of on this machine. Not with --threads "
+         "(--workers): the cluster's workers set how many run at once. [default: worker "
+         "processes on this machine, no setup]")
+
+
+def check_threads_or_cluster(threads: int | None, cluster: str | None,
+                             flag: str = "--threads") -> None:
+    """One of ``--threads`` (``--workers``) and ``--cluster``: both say where the batch runs."""
+    if threads is not None and cluster is not None:
+        bad(f"{flag} {threads} with --cluster {cluster!r}: the cluster's workers set how many "
+            f"tasks run at once; allowed one of the two")
+
+
 FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
               _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,

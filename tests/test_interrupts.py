@@ -157,9 +157,9 @@ def test_sigterm_to_the_command_alone_stops_its_workers_too(tmp_path):
     last = err.strip().splitlines()[-1]
     assert last.startswith("interrupted (SIGTERM): wrote 1 of 2 designs"), last
     assert sorted(p.name for p in out_dir.iterdir()) == ["solid-pu.csv", "summary.json"]
-    # the workers are joined before the main process exits; multiprocessing's resource tracker
-    # (a helper of the spawn context) exits when it sees the main process's pipe close, which
-    # on a loaded machine is a moment later (seen once: one process left at the first look)
+    # the workers are killed before the main process exits; the resource trackers (helpers of
+    # joblib's loky and of multiprocessing) exit when they see the main process's pipe close,
+    # which on a loaded machine is a moment later (seen once: one process left at the first look)
     deadline = time.monotonic() + 5.0
     while _session_processes(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.05)

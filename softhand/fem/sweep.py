@@ -96,7 +96,8 @@ def compare_with_paper(summaries: dict[str, dict[str, Any]]) -> dict[str, Any]:
 
 
 def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | None = None,
-              *, show_progress: bool = True, threads: int | None = None) -> BatchOutcome:
+              *, show_progress: bool = True, threads: int | None = None,
+              cluster: str | None = None) -> BatchOutcome:
     """Indent every design with the same settings; a progress bar counts designs.
 
     Args:
@@ -104,29 +105,39 @@ def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | 
             designs at once, one single-threaded worker process each; for a single design (or
             ``threads=1``) it runs in this process with ``threads`` element threads. The results
             do not depend on it.
+        cluster: a Dask scheduler's address (``tcp://HOST:PORT``): the designs run on its
+            workers, one single-threaded task each, whatever their number; not with ``threads``
+            (:func:`softhand.parallel.run_tasks`). The results are those of a local run.
 
     Returns:
         The batch outcome: finished results in ``designs`` order, failed designs (their
         :class:`ConvergenceError` text) and, after Ctrl-C, the designs that did not finish.
+
+    Raises:
+        ValueError: an unknown design, ``threads`` with ``cluster``, or a cluster that is
+            malformed or not answering (before any run).
     """
     from tqdm import tqdm
 
     designs = [parse_design(d).name for d in designs]  # validate all names first
     settings = settings or IndentationSettings()
-    jobs = min(len(designs), check_threads(threads))
+    if cluster is None:
+        jobs: int | None = min(len(designs), check_threads(threads))
+        # one design at a time: its element threads use the cores; else one thread per design
+        each = replace(settings, threads=check_threads(threads) if jobs == 1 else 1)
+    else:
+        jobs, each = threads, replace(settings, threads=1)  # run_tasks refuses threads here
     bar = tqdm(total=len(designs), desc="fe sweep", unit="design", disable=not show_progress)
 
     def done(name, ok: bool) -> None:
         bar.set_postfix_str(name if ok else f"{name} failed")
         bar.update()
 
-    # one design at a time: its element threads use the cores; else one thread per design
-    each = replace(settings, threads=check_threads(threads) if jobs == 1 else 1)
     # slowest first (pocket designs take longest) so that the workers finish together
     order = sorted(designs, key=lambda n: parse_design(n).topology != "pocket2")
     tasks = [(name, (name, each)) for name in order]
     try:
-        out = run_tasks(indent, tasks, threads=jobs, on_done=done)
+        out = run_tasks(indent, tasks, threads=jobs, cluster=cluster, on_done=done)
     finally:
         bar.close()
     results = {name: replace(out.results[name], settings=settings)

@@ -48,8 +48,11 @@ def speed_dir(root: str | Path, speed_mm_s: float) -> Path:
 
 
 def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | None = None,
+                  cluster: str | None = None,
                   show_progress: bool = True) -> tuple[dict[str, Any], list[str], bool]:
     """Run the FE records of ``designs`` at every speed and write them (each file atomically).
+
+    ``threads`` and ``cluster`` are :func:`softhand.fem.sweep.run_sweep`'s.
 
     Returns:
         (the summary written, the designs x speeds that did not finish: interrupted or failed,
@@ -70,7 +73,7 @@ def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | Non
     missing: list[str] = []
     for speed in SPEEDS_MM_S:
         batch = run_sweep(designs, replace(FE_SETTINGS, speed_mm_s=speed), threads=threads,
-                          show_progress=show_progress)
+                          cluster=cluster, show_progress=show_progress)
         for name, r in batch.results.items():
             rec = record_from_result(r)
             text = records_csv(rec)

@@ -30,7 +30,8 @@ def _one(name: str, reps: tuple[str, ...], fe_dir: str) -> SkinCalibration:
 
 def calibrate_many(names: list[str], representations: tuple[str, ...], *,
                    out_dir: str | Path | None = None, fe_dir: str | Path | None = None,
-                   threads: int | None = None, show_progress: bool = True) -> CalibrationRun:
+                   threads: int | None = None, cluster: str | None = None,
+                   show_progress: bool = True) -> CalibrationRun:
     """Calibrate ``names``, write one file each and ``index.json``; return what happened.
 
     Every skin that finished is written (atomically) even when others failed or Ctrl-C stopped
@@ -40,11 +41,13 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
     Args:
         threads: skins calibrated at once, one single-threaded worker process each (None:
             :func:`softhand.parallel.default_threads`).
+        cluster: a Dask scheduler's address (``tcp://HOST:PORT``): the skins are calibrated on
+            its workers; not with ``threads`` (:func:`softhand.parallel.run_tasks`).
     """
     from tqdm import tqdm
 
     out = Path(out_dir) if out_dir else SKINS_DIR
-    fe = str(fe_dir) if fe_dir else str(FE_DIR)
+    fe = str(Path(fe_dir).resolve()) if fe_dir else str(FE_DIR)  # workers may have another cwd
     bar = tqdm(total=len(names), desc="calibrate", unit="skin", disable=not show_progress)
 
     def done(name, ok: bool) -> None:
@@ -53,7 +56,7 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
 
     try:
         batch = run_tasks(_one, [(n, (n, representations, fe)) for n in names],
-                          threads=threads, on_done=done)
+                          threads=threads, cluster=cluster, on_done=done)
     finally:
         bar.close()
     missing = {n: "interrupted" for n in batch.missing}
