@@ -118,7 +118,12 @@ class Assembler:
     def evaluate(self, u: np.ndarray, state: ElementState, dt: float):
         """Internal force, a function that assembles the tangent at ``u``, and the new history.
 
-        The tangent is built only when asked for, so a converged Newton iteration skips it.
+        The function takes an optional sorted array of free DOFs and then returns only the
+        free-free block, in CSC (scattered straight into its pattern: no slicing of the whole
+        matrix). The tangent is built only when asked for, so a converged Newton iteration skips it. The
+        internal force is ``sum_q w G_a P`` with the first Piola-Kirchhoff stress ``P = F S``
+        (no strain matrix); the strain matrix is built only inside the tangent, block by
+        block, so the converged iteration of each step never builds it.
 
         Raises:
             ElementError: an element is inverted at this displacement.
@@ -152,17 +157,17 @@ class Assembler:
             new_groups.append(None if hist is None else ViscoState(
                 np.concatenate([p[2].S0 for p in parts]),
                 np.concatenate([p[2].H for p in parts], axis=1)))
-        B = np.empty((ne, nq, 6, nn * dim))
         fe = np.empty((ne, nn * dim))
 
-        def strain_force(a: int, b: int) -> None:
-            B[a:b] = self._strain_matrix(F[a:b], self.dNdX[a:b])
-            fe[a:b] = np.einsum("eqvk,eqv->ek", B[a:b], S[a:b] * self.wdet[a:b, :, None])
+        def force(a: int, b: int) -> None:
+            St = voigt_to_tensor(S[a:b])[..., :dim, :dim] * self.wdet[a:b, :, None, None]
+            P = np.matmul(F[a:b, :, :dim, :dim], St)  # (m, nq, dim, dim): w F S, in-plane
+            fe[a:b] = np.einsum("eqnb,eqib->eni", self.dNdX[a:b], P).reshape(b - a, nn * dim)
 
-        self._blocks(strain_force, ne)
+        self._blocks(force, ne)
         self._element_forces = fe  # of the last evaluation, for force_of()
         f = np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=mesh.n_dofs)
-        return f, lambda: self._tangent(B, D, S), ElementState(new_groups)
+        return f, lambda free=None: self._tangent(F, D, S, free), ElementState(new_groups)
 
     def force_of(self, elements: np.ndarray) -> np.ndarray:
         """Internal force vector of ``elements`` alone, at the last :meth:`evaluate`."""
@@ -194,8 +199,26 @@ class Assembler:
                 B[:, :, v] += Fd[:, :, None, :, b] * G[:, :, :, a, None]
         return B.reshape(ne, nq, 6, nn * dim)
 
-    def _tangent(self, B: np.ndarray, D: np.ndarray, S: np.ndarray) -> sp.csr_matrix:
-        """Material plus geometric stiffness from the Gauss-point arrays of :meth:`evaluate`."""
+    def _free_pattern(self, free: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Which entries of the full pattern lie in the free-free block, and that block's CSR
+        column indices and row pointers (cached for the last ``free``)."""
+        cached = getattr(self, "_free_cache", None)
+        if cached is not None and np.array_equal(cached[0], free):
+            return cached[1]
+        n = self.mesh.n_dofs
+        fmap = np.full(n, -1, dtype=np.int64)
+        fmap[free] = np.arange(free.size)
+        rows = np.repeat(np.arange(n), np.diff(self._indptr))
+        sel = (fmap[rows] >= 0) & (fmap[self._cols] >= 0)
+        cols = fmap[self._cols[sel]].astype(np.int32)
+        indptr = np.searchsorted(fmap[rows[sel]], np.arange(free.size + 1)).astype(np.int32)
+        self._free_cache = (free.copy(), (np.flatnonzero(sel), cols, indptr))
+        return self._free_cache[1]
+
+    def _tangent(self, F: np.ndarray, D: np.ndarray, S: np.ndarray,
+                 free: np.ndarray | None = None) -> sp.spmatrix:
+        """Material plus geometric stiffness from the Gauss-point arrays of :meth:`evaluate`
+        (the strain matrix is built block by block here, never for the whole mesh)."""
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
         nq = self.n_qp
@@ -207,8 +230,9 @@ class Assembler:
         def block(a: int, b: int) -> np.ndarray:
             w = self.wdet[a:b]
             m = b - a
-            DB = np.matmul(D[a:b] * w[..., None, None], B[a:b])  # (m, nq, 6, nd)
-            Bt = B[a:b].transpose(0, 3, 1, 2).reshape(m, nd, nq * 6)
+            B = self._strain_matrix(F[a:b], G[a:b])
+            DB = np.matmul(D[a:b] * w[..., None, None], B)  # (m, nq, 6, nd)
+            Bt = B.transpose(0, 3, 1, 2).reshape(m, nd, nq * 6)
             Km = np.matmul(Bt, DB.reshape(m, nq * 6, nd))
             St = voigt_to_tensor(S[a:b])[..., :dim, :dim] * w[..., None, None]
             GS = np.matmul(G[a:b], St)  # (m, nq, nn, dim)
@@ -222,4 +246,10 @@ class Assembler:
 
         parts = self._blocks(block, ne)
         data = parts[0] if len(parts) == 1 else np.sum(parts, axis=0)
-        return sp.csr_matrix((data, self._cols, self._indptr), shape=(mesh.n_dofs, mesh.n_dofs))
+        if free is None:
+            return sp.csr_matrix((data, self._cols, self._indptr),
+                                 shape=(mesh.n_dofs, mesh.n_dofs))
+        sel, cols, indptr = self._free_pattern(free)
+        # the pattern is symmetric, so its CSR arrays are the CSC arrays of the transpose: the
+        # tangent's own transpose (symmetric to rounding)
+        return sp.csc_matrix((data[sel], cols, indptr), shape=(free.size, free.size))

@@ -369,10 +369,9 @@ class _Model:
             # equilibrium of the penalty problem whatever the closed set did on the way here
             if res <= tol_N:
                 return u, new_state, it, history, (n_plate, n_pocket)
-            K = tangent_of() + Kp
+            Kff = tangent_of(self.free) + _block(Kp, self.free)
             if Kc is not None:
-                K = K + Kc
-            Kff = K[self.free][:, self.free].tocsc()
+                Kff = Kff + _block(Kc, self.free)
             du = _solve(Kff, -r)
             if not np.all(np.isfinite(du)):
                 raise ElementError("linear solve returned non-finite values")
@@ -388,6 +387,11 @@ class _Model:
             u = trial
         raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
+
+
+def _block(K, free: np.ndarray):
+    """The free-free block of a sparse contact tangent, in CSC."""
+    return K.tocsr()[free][:, free].tocsc()
 
 
 def _solve(K, b: np.ndarray) -> np.ndarray:
