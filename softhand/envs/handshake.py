@@ -196,6 +196,10 @@ class HandshakeEnv(TwoHandTouchEnv):
         partner_size: the partner's hand (length, width) in mm, each within +-2.5 SD of the
             paper's 30 subjects (Table 1: 187.5 +- 11.37 mm, 89.53 +- 6.80 mm; any combination);
             default the experimenter's 190 x 88 mm. The grasp is solved for this pair of hands.
+        contact_laws: ``geometry`` (default): each skin pair takes the law of its contact class,
+            its two geoms' shapes (a phalanx or a palm piece, pressed by a finger or a flat;
+            :mod:`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate
+            protocol. ``env.unwrapped.pair_laws`` names the law of every pair.
 
     Raises:
         ValueError: at construction, a bad argument or calibration file, naming it, the value
@@ -226,11 +230,12 @@ class HandshakeEnv(TwoHandTouchEnv):
                  sensor_placement: str | Mapping[str, str] | None = None,
                  observe: str = "sensor", sensor_dir: str | Path | None = None,
                  partner_size: tuple[float, float] | None = None,
-                 hand: str = "prosthetic") -> None:
+                 hand: str = "prosthetic", contact_laws: str = "geometry") -> None:
         scenario = HandshakeScenario(squeeze=squeeze, overload_N=overload_N,
                                      reward_weights=reward_weights, randomize=randomize)
         super().__init__(scenario=scenario, design=design, skins=skins,
                          representation=representation, frame_skip=frame_skip,
                          timestep_s=timestep_s, calibration_dir=calibration_dir, sensor=sensor,
                          sensor_placement=sensor_placement, observe=observe,
-                         sensor_dir=sensor_dir, partner_size=partner_size, hand=hand)
+                         sensor_dir=sensor_dir, partner_size=partner_size, hand=hand,
+                         contact_laws=contact_laws)

@@ -13,7 +13,7 @@ from softhand import __version__
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.physics import DivergenceError, mujoco_warnings_kept
-from softhand.envs.skins import calibrated_max_force, skin_of_pair
+from softhand.envs.skins import skin_of_pair
 from softhand.hands.config import HandConfig
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
@@ -66,6 +66,10 @@ class HandshakeRun:
     palm_force_N: np.ndarray | None = None
     #: the episode: sensored hand, partner's hand size (mm), seed, softhand version
     episode: dict = field(default_factory=dict)
+    #: the laws the pairs carried (the accounting's last columns, in this order) and how they
+    #: were chosen (softhand.envs.skins.CONTACT_LAWS)
+    law_labels: tuple[str, ...] = ()
+    contact_laws: str = "geometry"
 
     def grasp_checks(self) -> dict:
         """What a hand biomechanist checks (softhand.hands.grasp.grasp_metrics), from the
@@ -128,13 +132,16 @@ class HandshakeRun:
         from the side, which the pad's slide does not take);
         ``bone_on_bone``: bones pressed through skin and tissue (no law); ``no_law``: any other
         contact between the hands. ``calibrated_share_pct``: the skin-law force inside its
-        calibrated range (:func:`softhand.envs.skins.calibrated_max_force`), in % of all the force
+        calibrated range (the pair's law: :func:`softhand.envs.skins.pair_choices`), in % of all the force
         between the hands (frames of 10 ms; contacts beyond the range count as uncalibrated).
         ``out_of_range_time_pct``: law-carrying contact-frames above their law's range, in % of
         all law-carrying contact-frames. ``unsensed_skin_Ns``: the force through the prosthetic
         skin that no region sensor read (a phalanx's dorsal half, the palm's borders, the
         thenar), i.e. all pair force less the 18 region readings; ``unsensed_share_pct`` its
-        share of the pair force.
+        share of the pair force. ``by_law_Ns`` / ``by_law_share_pct``: the pair force by the law
+        each pair carried (its contact class, ``plate``, a fallback to the plate law, ``tissue``
+        or ``plate pad``; :class:`softhand.envs.skins.PairChoice`); ``contact_laws``: how the
+        laws were chosen.
         """
         n = len(ACCOUNT_CLASSES)
         acc = self.accounting if self.accounting is not None else np.zeros((1, n + 3))
@@ -151,6 +158,14 @@ class HandshakeRun:
             "bone_on_bone_Ns": integral["bone_on_bone"],
             "out_of_range_time_pct": 100.0 * float(acc[:, n + 1].sum()) / max(1.0, acc[:, n].sum()),
         })
+        laws = acc[:, n + 3:]
+        by_law = {label: float(laws[:, i].sum() * dt) for i, label in enumerate(self.law_labels)
+                  if i < laws.shape[1]}
+        law_total = sum(by_law.values())
+        out["by_law_Ns"] = by_law
+        out["by_law_share_pct"] = {k: 100.0 * v / law_total if law_total > 0 else 0.0
+                                   for k, v in by_law.items()}
+        out["contact_laws"] = self.contact_laws
         pair = acc[:, 0] + acc[:, 1]  # every pair is a prosthetic skin geom against tissue
         sensed = self.region_force_N.sum(axis=1) if self.region_force_N.size else np.zeros(1)
         unsensed = float(np.maximum(pair - sensed[:pair.size], 0.0).sum() * dt)
@@ -339,9 +354,10 @@ class ContactAreas:
     """
 
     def __init__(self, model: mujoco.MjModel, region_geoms: list[int],
-                 laws: Mapping[tuple[int, int], tuple[int, float]] | None = None,
+                 laws: Mapping[tuple[int, int], tuple[int, ...]] | None = None,
                  zones: list[int] | None = None) -> None:
         self.laws = dict(laws or {})
+        n_laws = 1 + max((v[2] for v in self.laws.values() if len(v) > 2), default=-1)
         #: per region, the site of its sensor zone (None: every contact of the geom counts)
         self.zones = list(zones) if zones is not None else [None] * len(region_geoms)
         names = [model.geom(g).name or "" for g in range(model.ngeom)]
@@ -349,8 +365,9 @@ class ContactAreas:
                               for n in names])
         #: after each call: normal force (N) between the hands per class of ACCOUNT_CLASSES,
         #: the number of law-carrying contacts, of those beyond their calibrated range, and the
-        #: skin-law force (N) in contacts beyond it
-        self.accounting = np.zeros(len(ACCOUNT_CLASSES) + 3)
+        #: skin-law force (N) in contacts beyond it, then the force (N) of the pair contacts
+        #: per law they carry (the third entry of each ``laws`` value)
+        self.accounting = np.zeros(len(ACCOUNT_CLASSES) + 3 + n_laws)
         self.region_of = -np.ones(model.ngeom, dtype=int)
         self.region_of[np.asarray(region_geoms)] = np.arange(len(region_geoms))
         self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
@@ -387,6 +404,8 @@ class ContactAreas:
             g1, g2 = c.geom1, c.geom2
             if self.hand[g1] >= 0 and self.hand[g2] >= 0 and self.hand[g1] != self.hand[g2]:
                 law = self.laws.get((min(g1, g2), max(g1, g2)))
+                if law is not None and len(law) > 2:
+                    acc[n + 3 + law[2]] += f
                 if law is not None and law[0] == 0 and max(self.pad_joint[g1],
                                                            self.pad_joint[g2]) >= 0:
                     share = self._pad_share(data, c)
@@ -436,21 +455,31 @@ def _box_contains(data: mujoco.MjData, model: mujoco.MjModel, site: int, point) 
     return bool(np.all(np.abs(local) <= model.site_size[site] + 1e-12))
 
 
-def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float]]:
-    """(geom, geom) of every contact pair -> (class index in ACCOUNT_CLASSES, calibrated range N).
+def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float, int]]:
+    """(geom, geom) of every contact pair -> (class index in ACCOUNT_CLASSES, calibrated range N,
+    index of its law in :func:`law_labels`).
 
     Pairs ``{Skin}__{tissue}`` carry the skin's design in series with tissue (``skin_law``); a
-    ``rigid`` region's pairs: ``tissue_law_only``.
+    ``rigid`` region's pairs: ``tissue_law_only``. Which law each carries:
+    ``env.pair_laws`` (:func:`softhand.envs.skins.pair_choices`).
     """
     m = env.model
+    labels = law_labels(env)
     out = {}
     for pid in range(m.npair):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_PAIR, pid) or ""
         _, skin = skin_of_pair(name, env.skins)
+        choice = env.pair_laws[name]
         kind = 0 if skin != "rigid" else 1
         g1, g2 = int(m.pair_geom1[pid]), int(m.pair_geom2[pid])
-        out[(min(g1, g2), max(g1, g2))] = (kind, calibrated_max_force(skin, env.calibration_dir))
+        out[(min(g1, g2), max(g1, g2))] = (kind, choice.calibrated_max_N,
+                                           labels.index(choice.law))
     return out
+
+
+def law_labels(env: HandshakeEnv) -> list[str]:
+    """The distinct laws the env's pairs carry, sorted (the force accounting's ``by_law``)."""
+    return sorted({c.law for c in env.pair_laws.values()})
 
 
 def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None = None,
@@ -535,4 +564,5 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                         np.array(frames["g"]), np.array(frames["pp"]),
                         {"hand": env.hand, "partner_size_mm": list(env.partner_size_mm),
                          "seed": seed, "options": dict(options or {}),
-                         "softhand_version": __version__})
+                         "softhand_version": __version__},
+                        tuple(law_labels(env)), env.contact_laws)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
@@ -26,6 +27,7 @@ from softhand.hands import partner_tissue_geoms, regions
 from softhand.hands.prosthetic import UNSENSED_SKINS, paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
+from softhand.skin.contact_classes import PLATE_CLASS, classify
 from softhand.skin.files import SKINS_DIR, load_calibration
 from softhand.skin.representations import (
     REPRESENTATIONS,
@@ -35,11 +37,13 @@ from softhand.skin.representations import (
 )
 from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams
+from softhand.validate import show
 
-__all__ = ["DEFAULT_DESIGN", "DEFAULT_REPRESENTATION", "HAND_REPRESENTATIONS", "OUTWARD",
-           "PAD_TESTED_MAX_TIMESTEP_S", "SKIN_CHOICES", "CalibratedRangeWarning", "add_skin_pairs",
-           "calibrated_max_force", "check_pad_timestep", "parse_skins", "series_law",
-           "skin_of_pair", "write_skin_laws"]
+__all__ = ["CONTACT_LAWS", "DEFAULT_DESIGN", "DEFAULT_REPRESENTATION", "HAND_REPRESENTATIONS",
+           "OUTWARD", "PAD_TESTED_MAX_TIMESTEP_S", "SKIN_CHOICES", "CalibratedRangeWarning",
+           "PairChoice", "add_skin_pairs", "calibrated_max_force", "check_contact_laws",
+           "check_pad_timestep", "pair_choices", "parse_skins", "series_law", "skin_of_pair",
+           "write_skin_laws"]
 
 class CalibratedRangeWarning(UserWarning):
     """Contacts between the hands carried more force than their pair laws were calibrated to (the
@@ -234,15 +238,85 @@ def check_pad_timestep(skins: Mapping[str, str], representations: Mapping[str, s
                          "its soft-contact representation")
 
 
+#: which laws the skin pairs take: ``geometry`` (default): the law of the pair's contact class
+#: (:mod:`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate protocol
+CONTACT_LAWS = ("geometry", "plate")
+
+
+def check_contact_laws(value: str) -> str:
+    """``value`` if it is one of :data:`CONTACT_LAWS` (ValueError naming it otherwise)."""
+    if value not in CONTACT_LAWS:
+        raise ValueError(f"contact_laws = {show(value)}: allowed {', '.join(CONTACT_LAWS)}")
+    return value
+
+
+@dataclass(frozen=True)
+class PairChoice:
+    """The law one skin pair carries, and why.
+
+    Attributes:
+        contact: the pair's contact class from its two geoms (``body/counterpart``).
+        law: the law it carries: the class (``phalanx/finger``...), ``plate`` (the paper's
+            protocol, by choice), ``plate (no CLASS law)`` (the skin has no law of its class),
+            ``tissue`` (a ``rigid`` region: the tissue's law alone) or ``plate pad`` (a
+            relaxation pad: the skin's plate law on the pad, the tissue's law in the pair).
+        params: the pair's soft contact (before the inverse-inertia scaling).
+        calibrated_max_N: the force up to which that law is calibrated.
+    """
+
+    contact: str
+    law: str
+    params: SoftContactParams
+    calibrated_max_N: float
+
+
+def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
+                 representations: Mapping[str, str] | None = None, *,
+                 directory: str | Path = SKINS_DIR,
+                 contact_laws: str = "geometry") -> dict[str, PairChoice]:
+    """The law of every skin pair of ``model`` (pairs named by :func:`add_skin_pairs`): the one
+    place that decides which law a pair takes (the scene's spec, its force ranges and its
+    accounting all read it)."""
+    check_contact_laws(contact_laws)
+    reps = dict(representations or {})
+    tissue = series_law("rigid", str(directory))
+    out = {}
+    for pid in range(model.npair):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
+        key, skin = skin_of_pair(name, skins)
+        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
+        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
+        contact = classify(model, int(model.pair_geom1[pid]), int(model.pair_geom2[pid]))
+        if skin == "rigid":
+            out[name] = PairChoice(contact, "tissue", tissue, float(DATA_MAX_N[HUMAN]))
+            continue
+        cal = _calibration(skin, str(directory))
+        by_class = cal.pair_laws.get(contact) if contact_laws == "geometry" else None
+        if by_class is not None:
+            law, params, top = contact, by_class.pair.params, by_class.pair.calibrated_max_N
+        else:
+            law = "plate" if contact_laws == "plate" or contact == PLATE_CLASS else \
+                f"plate (no {contact} law)"
+            params, top = series_law(skin, str(directory)), calibrated_max_force(skin,
+                                                                                 str(directory))
+        if type(rep).add_to_hand is not Representation.add_to_hand:
+            law = "plate pad"  # the pad carries the skin's plate law; the pair the tissue's
+        out[name] = PairChoice(contact, law, rep.hand_pair_law(params, tissue), float(top))
+    return out
+
+
 def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                     representations: Mapping[str, str] | None = None, *,
                     directory: str | Path = SKINS_DIR, pro: str = "pro_",
-                    hand_pad: HandPad | None = None) -> list[str]:
+                    hand_pad: HandPad | None = None,
+                    contact_laws: str = "geometry") -> list[str]:
     """Put each region's skin on the hand and add the skin pairs (:func:`add_skin_pairs`) with
     their laws in ``solref``/``solimp`` (a non-sensing skin: its region's design and
     representation; default representation ``soft-contact``).
 
-    Each representation goes through its class (:mod:`softhand.skin.representations`):
+    Each pair's law is chosen by :func:`pair_choices` (``contact_laws``: by the pair's contact
+    geometry, or the plate law everywhere). Each representation goes through its class
+    (:mod:`softhand.skin.representations`):
     ``soft-contact`` leaves the geom as it is and gives its pairs the skin-and-tissue pair law;
     ``soft-contact+relaxation`` moves the geom onto a relaxation pad along its outward normal
     (:data:`OUTWARD`) and gives its pairs the tissue's law alone; ``rigid``: the tissue's law.
@@ -255,7 +329,6 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
     """
     reps = dict(representations or {})
     hand_pad = hand_pad or HandPad()
-    tissue = series_law("rigid", str(directory))
     keys = [*skins, *UNSENSED_SKINS]
     for key in keys:
         region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
@@ -268,13 +341,11 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                         outward=OUTWARD.get(key, PALMAR), hand_pad=hand_pad)
     names = add_skin_pairs(spec, pro=pro)
     model = spec.compile()
+    choices = pair_choices(model, skins, reps, directory=directory, contact_laws=contact_laws)
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
     for name in names:
-        key, skin = skin_of_pair(name, skins)
-        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
-        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
-        law = rep.hand_pair_law(series_law(skin, str(directory)), tissue)
         pair = spec.pair(name)
-        pair.solref, pair.solimp = pair_law_values(model, name, law, issues=issues)
+        pair.solref, pair.solimp = pair_law_values(model, name, choices[name].params,
+                                                   issues=issues)
     warn_range_issues(issues)
     return names

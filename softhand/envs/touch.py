@@ -27,8 +27,9 @@ from softhand.envs.scenario import Scenario
 from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
 from softhand.envs.skins import (
     CalibratedRangeWarning,
-    calibrated_max_force,
+    check_contact_laws,
     check_pad_timestep,
+    pair_choices,
     parse_skins,
     series_law,
     skin_of_pair,
@@ -79,13 +80,15 @@ class TwoHandTouchEnv(gym.Env):
                  sensor_placement: str | Mapping[str, str] | None = None,
                  observe: str = "sensor", sensor_dir: str | Path | None = None,
                  partner_size: tuple[float, float] | None = None,
-                 hand: str = "prosthetic") -> None:
+                 hand: str = "prosthetic", contact_laws: str = "geometry") -> None:
         # every argument (and every calibration file used) is checked before any work is done
         if not isinstance(scenario, Scenario):
             raise ValueError(f"scenario = {show(scenario)}: expected a softhand.envs.scenario."
                              "Scenario")
         self.scenario = scenario
         self._closed = False
+        #: which laws the skin pairs take (softhand.envs.skins.CONTACT_LAWS)
+        self.contact_laws = check_contact_laws(contact_laws)
         # folders: None is the shipped one; an empty string is refused, not taken as the default
         if calibration_dir is not None:
             calibration_dir = check_path("calibration_dir", calibration_dir)
@@ -139,6 +142,7 @@ class TwoHandTouchEnv(gym.Env):
         # so that models/mjcf/handshake_scene.xml is exactly the simulated model (the XML writer
         # rounds numbers: a model compiled from the spec itself differs in the last digits)
         spec = skinned_scene_spec(self.skins, self.config, representations=self.representations,
+                                  contact_laws=self.contact_laws,
                                   directory=directory)
         spec.compile()
         m = mujoco.MjModel.from_xml_string(spec.to_xml())
@@ -167,12 +171,15 @@ class TwoHandTouchEnv(gym.Env):
         self.partner_servos = np.array(hum[:len(PARTNER_JOINTS)])
         self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
+        #: the law of every skin pair, and why (softhand.envs.skins.pair_choices)
+        self.pair_laws = pair_choices(m, self.skins, self.representations, directory=directory,
+                                      contact_laws=self.contact_laws)
         self._range = np.full((m.ngeom, m.ngeom), np.inf)
         self._pair_name = {}
         for pid in range(m.npair):
             name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
             g1, g2 = int(m.pair_geom1[pid]), int(m.pair_geom2[pid])
-            top = calibrated_max_force(skin_of_pair(name, self.skins)[1], self.calibration_dir)
+            top = self.pair_laws[name].calibrated_max_N
             self._range[g1, g2] = self._range[g2, g1] = top
             self._pair_name[(min(g1, g2), max(g1, g2))] = name
         self._reset_range_counts()

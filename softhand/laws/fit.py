@@ -411,7 +411,8 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
                  n_terms: int = 2, n_basis: int = 10,
                  knot_forces_N: tuple[float, ...] | None = KNOT_FORCES_N,
                  tau_bounds_s: tuple[float, float] = (0.01, 60.0),
-                 initial_tau_s: tuple[float, ...] | None = None) -> SkinLaw:
+                 initial_tau_s: tuple[float, ...] | None = None,
+                 prony: Prony | None = None) -> SkinLaw:
     """Fit an elastic law and an ``n_terms`` Prony series to ``curves`` (ramp + hold records).
 
     Args:
@@ -427,6 +428,9 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
             but its 33 pieces break the relaxation pad built on it, measured: hold error 100 %).
         tau_bounds_s: range of the relaxation times.
         initial_tau_s: starting relaxation times (default: log-spaced inside the bounds' middle).
+        prony: keep this relaxation and fit only the elastic law (one non-negative least-squares
+            solve; ``n_terms`` is then ignored). For a law of another contact geometry of the same
+            skin: the relaxation function of QLV is the material's, the elastic law the shape's.
     """
     if not curves:
         raise ValueError("curves is empty: at least one curve is needed")
@@ -435,6 +439,8 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
     lo, hi = tau_bounds_s
     if not 0 < lo < hi:
         raise ValueError(f"tau_bounds_s = {tau_bounds_s!r} must satisfy 0 < low < high")
+    if prony is not None:
+        n_terms = len(prony.g)
     if n_terms == 0:
         curves = [Curve(c.time_s[~c.hold], c.displacement_mm[~c.hold], c.force_N[~c.hold],
                         c.hold[~c.hold], c.label, c.sha256) for c in curves]
@@ -453,6 +459,8 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
     target = np.concatenate([w * c.force_N for w, c in zip(weights, curves, strict=True)])
 
     def unpack(theta: np.ndarray) -> Prony:
+        if prony is not None:
+            return prony
         if n_terms == 0:
             return Prony()
         tau = np.exp(theta[:n_terms])
@@ -467,7 +475,7 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
         coef, _ = nnls(A, target)
         return coef, A @ coef - target
 
-    if n_terms:
+    if n_terms and prony is None:
         tau0 = np.asarray(initial_tau_s if initial_tau_s is not None
                           else np.geomspace(max(lo, 0.1), min(hi, 10.0), n_terms), dtype=float)
         if tau0.size != n_terms:
@@ -483,10 +491,10 @@ def fit_skin_law(name: str, curves: list[Curve], *, validation: list[Curve] = ()
         theta = np.zeros(0)
         status = FitStatus.CONVERGED  # the elastic part is a linear (NNLS) solve
     coef, _ = solve(theta)
-    prony = unpack(theta)
-    order = np.argsort(prony.tau_s)
-    prony = Prony(tuple(np.asarray(prony.g)[order]), tuple(np.asarray(prony.tau_s)[order]))
-    law = SkinLaw(name, ElasticLaw(knots, coef), prony,
+    relax = unpack(theta)
+    order = np.argsort(relax.tau_s)
+    relax = Prony(tuple(np.asarray(relax.g)[order]), tuple(np.asarray(relax.tau_s)[order]))
+    law = SkinLaw(name, ElasticLaw(knots, coef), relax,
                   source={"curves": {c.label: c.sha256 for c in curves},
                           "validation": {c.label: c.sha256 for c in validation},
                           "fit_status": status.value})

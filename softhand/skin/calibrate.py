@@ -45,6 +45,16 @@ from softhand.laws.fit import (
     split_errors,
 )
 from softhand.laws.references import DATA_MAX_N, HUMAN, TABLE_MAX_N, reference_law
+from softhand.skin.contact_classes import (
+    CLASSES,
+    INDENTERS,
+    PLATE_CLASS,
+    TISSUE_REFERENCE_DESIGN,
+    class_curve,
+    fit_class_law,
+    tissue_class_law,
+    tissue_counterpart,
+)
 from softhand.skin.pad import PadParams
 from softhand.skin.pair import PairLaw, fit_pair_law
 from softhand.skin.representations import REPRESENTATIONS, get_representation, loading_ramp
@@ -52,10 +62,25 @@ from softhand.skin.rig import RigSettings, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams
 from softhand.validate import check_mapping, check_number, join, show
 
-__all__ = ["CALIBRATION_MASS_KG", "FORMAT_VERSION", "RepresentationResult", "SkinCalibration",
-           "calibrate_design", "calibrate_skin", "check_fe_folders", "fe_curves", "fit_pad",
-           "hold_error", "law_curve", "loading_error", "posture_sensitivity", "skin_names",
-           "social_touch_record"]
+__all__ = [
+    "CALIBRATION_MASS_KG",
+    "FORMAT_VERSION",
+    "ClassLaw",
+    "RepresentationResult",
+    "SkinCalibration",
+    "calibrate_design",
+    "calibrate_skin",
+    "check_fe_folders",
+    "class_pair_laws",
+    "fe_curves",
+    "fit_pad",
+    "hold_error",
+    "law_curve",
+    "loading_error",
+    "posture_sensitivity",
+    "skin_names",
+    "social_touch_record",
+]
 
 FORMAT_VERSION = 2  # 2: FE curves and laws to 20 N, split errors, the pair law against tissue
 CALIBRATION_MASS_KG = 0.2  # a hand segment; the mass tests use 0.01x (2 g) and 100x (20 kg)
@@ -168,14 +193,59 @@ class RepresentationResult:
 
 
 @dataclass(frozen=True)
+class ClassLaw:
+    """A skin's law for one contact class (:mod:`softhand.skin.contact_classes`) and its pair law
+    against the human tissue's law for that class.
+
+    Attributes:
+        key: the class, ``body/counterpart``.
+        law: the skin's law under the class's indenter (``phalanx/flat``: the plate law itself).
+        pair: the pair law against the tissue (pressed by the skin's body: ``tissue``).
+        indenter: the FE indenter of the class's curve.
+        tissue: the tissue's counterpart class (``finger`` or ``flat``).
+        curve: the FE curve's label and sha256.
+    """
+
+    key: str
+    law: SkinLaw
+    pair: PairLaw
+    indenter: str
+    tissue: str
+    curve: dict[str, str]
+
+    def to_dict(self) -> dict:
+        return {"law": self.law.to_dict(), "pair_law": self.pair.to_dict(),
+                "indenter": self.indenter, "tissue": self.tissue, "curve": self.curve}
+
+    @classmethod
+    def from_dict(cls, key: str, d: Any, *, path: str) -> ClassLaw:
+        """Parse :meth:`to_dict` output under ``path`` (ValueError naming the key path)."""
+        if key not in CLASSES:
+            raise ValueError(f"{path} = {show(key)}: unknown class; allowed: {', '.join(CLASSES)}")
+        check_mapping(path, d, required=("law", "pair_law", "indenter", "tissue", "curve"))
+        for text in ("indenter", "tissue"):
+            if not isinstance(d[text], str):
+                raise ValueError(f"{join(path, text)} = {show(d[text])}: expected a string")
+        check_mapping(join(path, "curve"), d["curve"], optional=None)
+        return cls(key, SkinLaw.from_dict(d["law"], key=join(path, "law")),
+                   PairLaw.from_dict(d["pair_law"], key=join(path, "pair_law")), d["indenter"],
+                   d["tissue"], dict(d["curve"]))
+
+
+@dataclass(frozen=True)
 class SkinCalibration:
-    """Everything the hand needs for one skin, with provenance."""
+    """Everything the hand needs for one skin, with provenance.
+
+    ``pair_law`` is the paper's protocol (skin and tissue both under a plate); ``pair_laws`` the
+    laws per contact class (:class:`ClassLaw`), which the handshake uses by default.
+    """
 
     design: str
     law: SkinLaw
     representations: dict[str, RepresentationResult]
     provenance: dict[str, Any]
     pair_law: PairLaw | None = None
+    pair_laws: dict[str, ClassLaw] = field(default_factory=dict)
     _parsed: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def _representation(self, name: str) -> RepresentationResult:
@@ -211,6 +281,8 @@ class SkinCalibration:
                "provenance": self.provenance}
         if self.pair_law is not None:
             out["pair_law"] = self.pair_law.to_dict()
+        if self.pair_laws:
+            out["pair_laws"] = {k: v.to_dict() for k, v in self.pair_laws.items()}
         return out
 
     @classmethod
@@ -232,7 +304,7 @@ class SkinCalibration:
                         else "?")
         try:
             check_mapping("", d, required=("format_version", "design", "law", "representations"),
-                          optional=("provenance", "pair_law"))
+                          optional=("provenance", "pair_law", "pair_laws"))
             version = d["format_version"]
             if version != FORMAT_VERSION or isinstance(version, bool):
                 raise ValueError(f"format_version {version!r} is not {FORMAT_VERSION} (written by "
@@ -256,7 +328,10 @@ class SkinCalibration:
             provenance = d.get("provenance", {})
             check_mapping("provenance", provenance, optional=None)
             pair = PairLaw.from_dict(d["pair_law"]) if "pair_law" in d else None
-            return cls(d["design"], law, reps, dict(provenance), pair, parsed)
+            classes = check_mapping("pair_laws", d.get("pair_laws", {}), optional=None)
+            by_class = {k: ClassLaw.from_dict(k, v, path=join("pair_laws", k))
+                        for k, v in classes.items()}
+            return cls(d["design"], law, reps, dict(provenance), pair, by_class, parsed)
         except ValueError as exc:
             raise ValueError(f"{source}: skin {name}: {exc}") from None
 
@@ -453,7 +528,82 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
                             reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
                             initial=initial)
         provenance["pair_law_fit_s"] = time.perf_counter() - t0
+        if curves is None:  # a design with FE curves: its laws per contact class too
+            t0 = time.perf_counter()
+            by_class = class_pair_laws(design, law, main, fe_dir,
+                                       reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
+                                       initial=initial)
+            provenance["pair_laws_fit_s"] = time.perf_counter() - t0
+            return SkinCalibration(design, law, results, provenance, pair, by_class)
     return SkinCalibration(design, law, results, provenance, pair)
+
+
+def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict | None
+                        ) -> Curve | None:
+    """The FE curve of ``design`` for class ``key``, checked against its folder's summary (the
+    settings of the plate folder but for the indenter, the body and the hold), or None."""
+    from softhand.fem.sweep import read_summary
+
+    path = class_curve(design, key, fe_dir)
+    if not path.exists():
+        return None
+    summary = read_summary(path.parent)
+    if summary is None:
+        raise ValueError(f"{path}: its folder has no summary.json: class curves must come from "
+                         "`softhand fe sweep`")
+    got = summary["provenance"]["settings"]
+    want = INDENTERS[key.split("/")[1]]
+    if got.get("indenter", "plate") != want or got.get("body", "phalanx") != key.split("/")[0]:
+        raise ValueError(f"{path.parent}: holds curves of indenter {got.get('indenter')!r} on "
+                         f"body {got.get('body', 'phalanx')!r}; class {key} needs {want!r} on "
+                         f"{key.split('/')[0]!r}")
+    if plate is not None:
+        ignore = {"indenter", "body", "hold_s", "threads", "max_depth_mm"}
+        base = plate["provenance"]["settings"]
+        diff = [f"{k} {base[k]!r} (plate) vs {got[k]!r}" for k in sorted(base)
+                if k not in ignore and k in got and base[k] != got[k]]
+        if diff:
+            raise ValueError(f"{path.parent}: settings differ from the plate folder's: "
+                             + "; ".join(diff))
+    return _recorded_curve(path, f"{design} {key}@0.5mm/s", summary)
+
+
+def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str | Path, *,
+                    reference_mass_kg: float, initial: SoftContactParams | None = None
+                    ) -> dict[str, ClassLaw]:
+    """The laws of ``design`` per contact class whose FE curve ``fe_dir`` holds
+    (:mod:`softhand.skin.contact_classes`), each with its pair law against the human tissue's law
+    for that class. ``phalanx/flat`` is the plate law itself (against the tissue pressed like a
+    finger, as a prosthetic phalanx presses a partner's palm). No tissue ``finger`` law (the FE
+    folders lack :data:`TISSUE_REFERENCE_DESIGN`'s plate or finger curve): only the classes
+    whose tissue side is flat."""
+    from softhand.fem.sweep import read_summary
+
+    root = Path(fe_dir)
+    plate = read_summary(root)
+    tissue = reference_law(HUMAN)
+    ref_finger = _class_folder_curve(TISSUE_REFERENCE_DESIGN, "phalanx/finger", root, plate)
+    ref_plate = root / f"{TISSUE_REFERENCE_DESIGN}.csv"
+    tissues = {"flat": tissue, "finger": None}
+    if ref_finger is not None and ref_plate.exists():
+        ref = _recorded_curve(ref_plate, f"{TISSUE_REFERENCE_DESIGN}@0.5mm/s", plate)
+        tissues["finger"] = tissue_class_law(tissue, "finger", ref, ref_finger)
+    out: dict[str, ClassLaw] = {}
+    for key in CLASSES:
+        t = tissues[tissue_counterpart(key)]
+        curve = plate_curve if key == PLATE_CLASS else _class_folder_curve(design, key, root,
+                                                                              plate)
+        if t is None or curve is None:
+            continue
+        skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
+        top = float(curve.force_N.max())
+        pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
+                            tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
+                            reference_mass_kg=reference_mass_kg, initial=initial)
+        out[key] = ClassLaw(key, skin, pair, INDENTERS[key.split("/")[1]],
+                            tissue_counterpart(key), {"label": curve.label,
+                                                      "sha256": curve.sha256})
+    return out
 
 
 def law_curve(law: SkinLaw, *, speed_mm_s: float = 0.5, force_N: float = 20.0,

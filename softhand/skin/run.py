@@ -125,7 +125,8 @@ def _merged(cal: SkinCalibration, out: Path) -> SkinCalibration:
     reps = {k: v for k, v in old.representations.items() if k not in cal.representations}
     reps.update(cal.representations)
     pair = cal.pair_law if cal.pair_law is not None else old.pair_law
-    return SkinCalibration(cal.design, cal.law, reps, cal.provenance, pair)
+    classes = cal.pair_laws or old.pair_laws
+    return SkinCalibration(cal.design, cal.law, reps, cal.provenance, pair, classes)
 
 
 def summary_table(summary: dict[str, Any]) -> str:
