@@ -588,6 +588,12 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
         click.echo(f"wrote {render_state(press.model, press.qpos, *empty, picture, view=view)}")
 
 
+_OPT_CONTACT_LAWS = click.option(
+    "--contact-laws", type=click.Choice(["geometry", "plate"]), default="geometry",
+    show_default=True,
+    help="Laws of the skin pairs: geometry (each pair the law of its contact class: a phalanx or "
+         "a palm piece, pressed by a finger or a flat; `--json` and the summary name each law's "
+         "share) or plate (every pair the paper's flat-plate law).")
 _OPT_HAND = click.option(
     "--hand", type=click.Choice(["prosthetic", "human"]), default="prosthetic", show_default=True,
     help="The sensored hand: the prosthetic hand, or the paper's relaxed human hand (its protocol).")
@@ -627,9 +633,10 @@ _OPT_HAND = click.option(
               help="The partner's hand, within +-2.5 SD of the paper's subjects "
                    "[default: 190,88, the experimenter].")
 @_OPT_HAND
+@_OPT_CONTACT_LAWS
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
-              placement_items, signal, target_N, partner_size, hand, as_json,
+              placement_items, signal, target_N, partner_size, hand, contact_laws, as_json,
               **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
@@ -653,7 +660,7 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
                            timestep_s=timestep_s, sensor=spec, sensor_placement=placement,
-                           partner_size=size, hand=hand)
+                           partner_size=size, hand=hand, contact_laws=contact_laws)
     except ValueError as exc:
         msg = str(exc)
         if msg.startswith("sensor "):
@@ -717,6 +724,9 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                f"contacts beyond their law's calibrated range {acc['out_of_range_time_pct']:.1f} % "
                f"of contact time; unsensed skin {acc['unsensed_share_pct']:.1f} % of the skin's "
                "force")
+    laws = ", ".join(f"{k} {v:.1f} %" for k, v in sorted(acc["by_law_share_pct"].items(),
+                                                       key=lambda kv: -kv[1]))
+    click.echo(f"skin pair force by law (--contact-laws {acc['contact_laws']}): {laws or '-'}")
     kin = summary["kinematics"]
     flex = ", ".join(f"{d} {v:.0f}" for d, v in kin["prosthetic_flexion_deg"].items())
     click.echo(f"prosthetic flexion reached (deg): {flex}; thumb rotation "
@@ -795,7 +805,9 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
 @click.option("--out", "out_dir", default="population", show_default=True,
               help="Folder for partners.json, results.json, results.csv and fig4.png.")
 @_OPT_HAND
-def population(n, seed, design, controller, threads, cluster, out_dir, hand) -> None:
+@_OPT_CONTACT_LAWS
+def population(n, seed, design, controller, threads, cluster, out_dir, hand,
+               contact_laws) -> None:
     """The paper's handshake experiment: n sampled partners shake the hand; per-region results
     and a Fig. 4-style figure against the paper's set."""
     from softhand.envs.handshake import HandshakeEnv
@@ -811,11 +823,13 @@ def population(n, seed, design, controller, threads, cluster, out_dir, hand) -> 
     _check_hand(hand, controller, design=design)
     out = checked_dir(out_dir, "--out", need_bytes=2e6 + 4e3 * n)
     try:
-        HandshakeEnv(design=design, hand=hand)  # the skin and its files, before any work
+        # the skin and its files, before any work
+        HandshakeEnv(design=design, hand=hand, contact_laws=contact_laws)
     except ValueError as exc:
         bad(str(exc))
     partners = sample_partners(n, seed)
-    settings = {"design": design, "controller": controller, "hand": hand}
+    settings = {"design": design, "controller": controller, "hand": hand,
+                "contact_laws": contact_laws}
     done = []
     with progress_bar(f"{n} partners", disable=False) as update:
         batch = run_tasks(run_partner, [(p.index, (p, settings)) for p in partners],
@@ -829,7 +843,8 @@ def population(n, seed, design, controller, threads, cluster, out_dir, hand) -> 
         with interrupts_deferred():
             meta = {"n": n, "seed": seed, "hand": hand,
                     "design": "human tissue" if hand == "human" else design or "pocket2-sil",
-                    "controller": controller, "finished": len(results), "missing": missing,
+                    "controller": controller, "contact_laws": contact_laws,
+                    "finished": len(results), "missing": missing,
                     "version": __version__, "git_revision": git_revision(),
                     "command": "softhand population " + " ".join(sys.argv[2:])}
             atomic_write_text(out / "partners.json",
