@@ -42,6 +42,7 @@ import os
 import signal
 import sys
 import warnings
+from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -256,9 +257,12 @@ def _print_result(s: dict[str, Any]) -> None:
     def fmt(v, unit):
         return "not reached" if v is None else f"{v:.3f} {unit}"
 
-    plate = s.get("indenter", "plate") == "plate"  # the paper's numbers are the plate's
+    palm = s.get("body", "phalanx") != "phalanx"
+    # the paper's numbers are the plate's on the phalanx
+    plate = s.get("indenter", "plate") == "plate" and not palm
     click.echo(f"design {s['design']} ({s['mode']}, mesh {s['mesh']}, moduli {s['moduli']}"
-               + ("" if plate else f", indenter {s['indenter']}") + ")")
+               + ("" if s.get("indenter", "plate") == "plate" else f", indenter {s['indenter']}")
+               + (f", body {s['body']}" if palm else "") + ")")
     ref = displacement_at_2n(s["design"]) if plate else None
     click.echo(f"  displacement at 2 N : {fmt(s['displacement_at_2N_mm'], 'mm')}"
                + (f"   (paper {ref} mm)" if ref else ""))
@@ -355,9 +359,9 @@ def fe_sweep(out_dir, designs, cluster, force, threads, **kw) -> None:
                                         plot=not batch.interrupted)  # stop fast: no plot
                 if not missing:
                     staged.commit()
-            if settings.indenter != "plate":
-                click.echo(f"note: indenter {settings.indenter}; the paper's numbers below are "
-                           "the plate's")
+            if settings.indenter != "plate" or settings.body != "phalanx":
+                click.echo(f"note: indenter {settings.indenter} on the {settings.body}; the "
+                           "paper's numbers below are the plate's on the phalanx")
             click.echo(paper_error_table(summary))
     _end_of_batch("designs", len(batch.results), len(names), out, missing, batch.interrupted,
                   staged=shipped and not staged.committed)
@@ -514,7 +518,9 @@ def skin_apply(hand, out, geom_items, against, max_force) -> None:
     for s in skinned:
         err = "" if s.law is None else (f"; law vs its FE loading curve up to 2 N: "
                                          f"{skin_law_error(s.design, s.law):.2f} % RMS of 2 N")
-        click.echo(f"{s.geom}: {s.design}@{s.representation}, {len(s.pairs)} pairs{err}")
+        classes = Counter(s.pair_laws.values())
+        laws = ", ".join(f"{n} {k}" for k, n in sorted(classes.items()))
+        click.echo(f"{s.geom}: {s.design}@{s.representation}, {len(s.pairs)} pairs ({laws}){err}")
     click.echo(f"wrote {path}")
 
 

@@ -363,7 +363,8 @@ class TwoHandTouchEnv(gym.Env):
         parts = []
         if summary["contact_steps"]:
             law = ("human tissue's, the skin rigid" if summary["worst_skin"] == "rigid"
-                   else f"{summary['worst_skin']} in series with human tissue")
+                   else f"{summary['worst_skin']} in series with human tissue, "
+                   f"{self.pair_laws[summary['worst_pair']].law} law")
             parts.append(
                 f"{summary['contact_steps']} contact-steps on {summary['pairs']} pair(s) beyond "
                 f"their law's calibrated range; the worst, pair {summary['worst_pair']}, carried "

@@ -18,6 +18,13 @@ skin pads on an :class:`mujoco.MjSpec`:
   fits it, in closed form, to the shipped FE loading curve up to that force, which is more
   accurate below it (pocket2-sil up to 2 N: 3.9 % RMS of 2 N with the 0-20 N law, 1.5 % with a
   law fitted to 5 N; :func:`skin_law_error` measures it);
+* each pair's law follows its contact class (:mod:`softhand.skin.contact_classes`): a round
+  skinned geom (capsule, cylinder, sphere, ellipsoid) is a phalanx, a flat one (mesh, box) a palm;
+  a counterpart round up to 15 mm in radius presses like a finger, anything else like a flat.
+  The phalanx pressed by a flat takes the shipped law (the paper's plate); the other classes the
+  skin's law of that class, fitted in closed form to its loading ramp (a finger-sized cylinder
+  on a phalanx carries 0.5-0.8x the plate's force at equal depth); a class the skin has no law of
+  takes the plate law, and the header says so for each pair;
 * the law is MuJoCo's per contact point: a skinned geom that meets a counterpart in two points
   at once is twice as stiff as the law. MuJoCo's capsule-box and capsule-plane colliders make two
   contacts of a capsule lying flat on a face, and its convex-convex collider (meshes) makes
@@ -40,7 +47,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
@@ -49,6 +56,7 @@ import numpy as np
 from softhand import __version__
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paths import FE_DIR, SKINS_DIR
+from softhand.skin.contact_classes import PLATE_CLASS, classify
 from softhand.skin.representations import StockContact, get_representation, loading_ramp
 from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -71,6 +79,9 @@ class SkinnedGeom:
     law: SoftContactParams | None
     pairs: tuple[str, ...]
     fit_range_N: float | None  # None: the shipped 0-20 N law
+    #: per pair: the contact class of its two geoms and the law it got (the class, or
+    #: ``plate`` where the skin has no law of the class; :mod:`softhand.skin.contact_classes`)
+    pair_laws: dict[str, str] = field(default_factory=dict)
 
 
 def parse_geom_skins(items: Mapping[str, str] | Sequence[str]) -> dict[str, tuple[str, str]]:
@@ -129,6 +140,21 @@ def _law(design: str, max_force_N: float | None, skins_dir, fe_dir) -> SoftConta
     except FileNotFoundError:
         curve = law_curve(cal.law)  # reference skins: their paper-based law
     _, d, f = loading_ramp(curve, max_force_N)
+    return fit_soft_contact(d, f).params
+
+
+def _class_law(design: str, key: str, max_force_N: float | None, skins_dir
+               ) -> SoftContactParams | None:
+    """The skin's own soft contact for contact class ``key`` (a rigid counterpart): fitted in
+    closed form to the loading ramp of the class's law (to ``max_force_N``, default 20 N);
+    None when the skin has no law of that class."""
+    from softhand.skin.calibrate import law_curve
+    from softhand.skin.files import load_calibration
+
+    c = load_calibration(design, skins_dir).pair_laws.get(key)
+    if c is None:
+        return None
+    _, d, f = loading_ramp(law_curve(c.law), max_force_N or MAX_FORCE_RANGE_N[1])
     return fit_soft_contact(d, f).params
 
 
@@ -235,17 +261,28 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
     model = spec.compile()
     out = []
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
+    by_class: dict[tuple[str, str], SoftContactParams | None] = {}
     for geom, (design, rep) in chosen.items():
         law = laws.get(design) if rep == "soft-contact" else None
+        used = {}
         for name in made[geom]:
             pair = spec.pair(name)
+            pid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, name)
+            key = classify(model, int(model.pair_geom1[pid]), int(model.pair_geom2[pid]))
             if law is None:  # rigid: MuJoCo's stock contact
                 stock = StockContact()
                 pair.solref, pair.solimp = list(stock.solref), list(stock.solimp)
-            else:
-                pair.solref, pair.solimp = pair_law_values(model, name, law, issues=issues)
+                used[name] = f"{key}: stock contact"
+                continue
+            this = law  # the plate law: the paper's protocol and every class without a law
+            if key != PLATE_CLASS:
+                if (design, key) not in by_class:
+                    by_class[(design, key)] = _class_law(design, key, max_force_N, skins_dir)
+                this = by_class[(design, key)] or law
+            used[name] = key if this is not law or key == PLATE_CLASS else f"{key}: plate law"
+            pair.solref, pair.solimp = pair_law_values(model, name, this, issues=issues)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
-                               None if law is None else max_force_N))
+                               None if law is None else max_force_N, used))
     warn_range_issues(issues)
     return out
 
@@ -267,7 +304,8 @@ def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str |
     for s in skinned:
         fit = ("shipped 0-20 N law" if s.fit_range_N is None
                else f"soft contact fitted to the FE loading curve up to {s.fit_range_N:g} N")
-        lines.append(f"{s.geom}: {s.design}@{s.representation} ({fit}), {len(s.pairs)} pairs")
+        lines.append(f"{s.geom}: {s.design}@{s.representation} ({fit}), {len(s.pairs)} pairs; "
+                     + ", ".join(f"{p}: {k}" for p, k in s.pair_laws.items()))
     header = "<!--\n" + "\n".join(f"  {line}" for line in lines) + "\n-->\n"
     spec.compile()
     path = Path(out)
