@@ -12,7 +12,8 @@ and the contact force :math:`\sum_q \varepsilon w_q\langle -g_q\rangle`. Integra
 (not nodes) lets the contact zone grow inside an element, which keeps the force curve smooth.
 
 * Plate: a rigid plane ``y = top - d`` (d the plate displacement). Frictionless: only the vertical
-  component enters the gap. Exact for a flat plate, any sliding.
+  component enters the gap. Exact for a flat plate, any sliding. A plate smaller than the body
+  (``Mesh.plate_half_mm``, the palm) acts on the surface points under its face only.
 * Cylinder or sphere (:class:`RoundGaps`): the gap to a rigid cylinder or sphere of radius R is
   nonlinear in u, :math:`g = |P(x - c)| - R` with :math:`x` the current point, :math:`c` the
   centre (on the axis) and :math:`P` the projection off the cylinder's axis (the identity for a
@@ -111,13 +112,28 @@ def _gap_matrix(mesh: Mesh, faces: np.ndarray, N: np.ndarray, direction: np.ndar
 
 
 def plate_gaps(mesh: Mesh, top_mm: float, n_gauss: int = 4) -> GapSet:
-    """Gap between the outer surface and the plate ``y = top_mm - shift`` (shift = -d)."""
+    """Gap between the outer surface and the plate ``y = top_mm - shift`` (shift = -d).
+
+    A finite plate (``mesh.plate_half_mm`` = (hx, hz), a body wider than the plate) presses only
+    the points under its face, ``|x| <= hx`` and ``|z| <= hz`` in the undeformed state (2D:
+    ``|x| <= hx``): frictionless points hardly slide, so the set is fixed for the run. The face's
+    edge falls between Gauss points unless a mesh line lies on it (the palm mesh puts one at
+    ``z = hz``). Without ``plate_half_mm`` (the phalanx) every point of the outer surface is in
+    the set, as before.
+    """
     N, pos, _, weight = _face_geometry(mesh, mesh.outer_faces, n_gauss)
     down = np.zeros(pos.shape)
     down[..., 1] = 1.0
     G = _gap_matrix(mesh, mesh.outer_faces, N, down, -1.0)
-    return GapSet((top_mm - pos[..., 1]).ravel(), G, weight.ravel(),
-                  pos.reshape(-1, mesh.dim))
+    gaps = GapSet((top_mm - pos[..., 1]).ravel(), G, weight.ravel(), pos.reshape(-1, mesh.dim))
+    if mesh.plate_half_mm is None:
+        return gaps
+    hx, hz = mesh.plate_half_mm
+    tol = 1e-9
+    under = np.abs(gaps.points[:, 0]) <= hx + tol
+    if mesh.dim == 3:
+        under &= np.abs(gaps.points[:, 2]) <= hz + tol
+    return GapSet(gaps.g0[under], gaps.G[under], gaps.weight[under], gaps.points[under])
 
 
 class RoundGaps:

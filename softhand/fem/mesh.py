@@ -97,6 +97,13 @@ class Mesh:
         roof_faces, floor_faces: facing pocket surfaces, paired row by row.
         symmetry_factor: multiplier from the modelled part to the whole phalanx force.
         length_mm: length the 2D force per unit length is multiplied by.
+        spec: the element counts it was built from (:class:`MeshSpec` for the phalanx; the palm's
+            :class:`softhand.fem.palm.PalmMeshSpec`).
+        plate_half_mm: half sizes (across x, along z) of the plate's face, centred over x = z = 0,
+            where the plate is smaller than the body: :func:`softhand.fem.contact.plate_gaps`
+            then presses only the outer-surface points under it (2D: ``|x| <= `` the first).
+            None: the plate covers the whole modelled surface (the phalanx, 16 x 10 mm under
+            the paper's 20 x 10 mm plate).
     """
 
     dim: int
@@ -110,7 +117,8 @@ class Mesh:
     floor_faces: np.ndarray
     symmetry_factor: float
     length_mm: float
-    spec: MeshSpec = field(default_factory=MeshSpec)
+    spec: object = field(default_factory=MeshSpec)
+    plate_half_mm: tuple[float, float] | None = None
 
     @property
     def n_dofs(self) -> int:
@@ -313,5 +321,5 @@ def full_model(mesh: Mesh) -> Mesh:
         ref=mesh.ref, fixed=np.unique(np.concatenate([fixed * 3 + c for c in range(3)])),
         outer_faces=np.concatenate(faces["outer"]), roof_faces=np.concatenate(faces["roof"]),
         floor_faces=np.concatenate(faces["floor"]), symmetry_factor=1.0, length_mm=1.0,
-        spec=mesh.spec,
+        spec=mesh.spec, plate_half_mm=mesh.plate_half_mm,
     )
