@@ -185,6 +185,12 @@ _OPT_INDENTER = click.option(
          "cylinder:R@0 only.")
 
 
+_OPT_BODY = click.option(
+    "--body", type=click.Choice(["phalanx", "palm"]), default="phalanx", show_default=True,
+    help="What is indented: the paper's phalanx, or the palm (a slab of the design's layers over "
+         "a metacarpal; plate, sphere, cylinder at 0 or 90 deg; no embedded sensors).")
+
+
 def cpus_allowed(ctx, param, value):
     """--threads / --workers: at most the CPUs this process may run on (more only queue)."""
     from softhand.parallel import available_cpus
@@ -231,7 +237,7 @@ def check_threads_or_cluster(threads: int | None, cluster: str | None,
             f"tasks run at once; allowed one of the two")
 
 
-FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
+FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_BODY, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
               _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,
                   _OPT_FORCE, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
@@ -307,7 +313,8 @@ def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **
     try:
         settings = IndentationSettings(mode=mode, **kw)
     except ValueError as exc:  # the option types already checked each number
-        bad(str(exc))
+        bad(f"--body {kw['body']}: {exc}" if str(exc).startswith("indenter = ") and
+            kw.get("body", "phalanx") != "phalanx" else str(exc))
     materials = load_materials(materials_path)
     try:
         settings = replace(settings, materials=materials)

@@ -102,6 +102,9 @@ class IndentationSettings:
             ``"cylinder:7.4@90"``). Each moves as the plate does; the force is the reaction
             along its travel. A cylinder at an angle other than 0 or 90 deg runs on the full
             model (:func:`softhand.fem.mesh.full_model`), which reads no sensor patches.
+        body: ``"phalanx"`` (the paper's) or ``"palm"``: the slab of the design's layers over a
+            metacarpal (:mod:`softhand.fem.palm`, its default geometry and its own mesh levels of
+            the same names; no embedded sensor patches).
     """
 
     mode: str = "3d"
@@ -125,6 +128,7 @@ class IndentationSettings:
     materials: dict[str, dict] = field(default_factory=dict)
     sensors: tuple[SensorPatch, ...] | None = None
     indenter: str = "plate"
+    body: str = "phalanx"
 
     def __post_init__(self) -> None:
         if self.mode not in ("3d", "2d"):
@@ -132,6 +136,12 @@ class IndentationSettings:
         ind = parse_indenter(self.indenter)
         ind.check_mode(self.mode)
         object.__setattr__(self, "indenter", ind.text)
+        from softhand.fem.body import check_body
+
+        check_body(self.body, ind.text)
+        if self.body != "phalanx" and self.sensors:
+            raise ValueError(f"sensors = {self.sensors!r}: embedded sensors are read on the "
+                             f"phalanx only; body = {self.body!r} (allowed: None or () there)")
         if ind.full_model and self.sensors:
             raise ValueError(f"sensors = {self.sensors!r}: embedded sensors are read on the "
                              f"quarter model only; indenter = {ind.text!r} runs the full model "
@@ -244,6 +254,7 @@ class IndentationResult:
             "moduli": s.moduli,
             "elastic_only": s.elastic_only,
             "indenter": s.indenter,
+            "body": s.body,
             "status": self.status.value,
             "displacement_at_2N_mm": self.displacement_at(2.0),
             "displacement_at_1N_mm": self.displacement_at(1.0),
@@ -290,6 +301,11 @@ class _Model:
         mats = [_material(design.inner, settings), _material(design.outer, settings)]
         ind = parse_indenter(settings.indenter)
         whole = mesh is None and ind.full_model
+        if mesh is None and settings.body != "phalanx":
+            from softhand.fem.body import body_mesh
+
+            mesh = body_mesh(settings.body, design, settings.mesh,
+                             dim=3 if settings.mode == "3d" else 2, indenter=settings.indenter)
         if mesh is None:
             self.mesh: Mesh = build_mesh(geom, settings.mesh_spec,
                                          dim=3 if settings.mode == "3d" else 2)

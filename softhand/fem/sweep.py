@@ -168,12 +168,20 @@ def read_summary(folder: str | Path) -> dict[str, Any] | None:
     return data
 
 
+def _body_geometry(body: str) -> dict[str, Any]:
+    """The geometry of a body other than the phalanx (its defaults: the FE runs it)."""
+    from softhand.fem.palm import PalmGeometry
+
+    return asdict(PalmGeometry()) if body == "palm" else {}
+
+
 def _settings_of(settings: IndentationSettings | dict[str, Any]) -> dict[str, Any]:
     """The settings that make a curve what it is (threads do not), as JSON values."""
     import json
 
     data = settings if isinstance(settings, dict) else asdict(settings)
-    data = {"indenter": "plate", **data}  # folders written before indenters hold plate curves
+    # folders written before indenters and bodies hold plate curves on the phalanx
+    data = {"indenter": "plate", "body": "phalanx", **data}
     return {k: v for k, v in json.loads(json.dumps(data, default=str)).items() if k != "threads"}
 
 
@@ -258,6 +266,8 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
             "mesh_sizes": {n: sizes[n] for n in order},
             "curve_sha256": {n: hashes[n] for n in order},
             "paper": paper()["source"],
+            **({"body_geometry": _body_geometry(first.settings.body)}
+               if first.settings.body != "phalanx" else {}),
         },
         "complete": not missing,
         "missing": missing,

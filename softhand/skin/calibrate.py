@@ -559,6 +559,8 @@ def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict |
                          f"{key.split('/')[0]!r}")
     if plate is not None:
         ignore = {"indenter", "body", "hold_s", "threads", "max_depth_mm"}
+        if key.split("/")[0] != "phalanx":
+            ignore.add("mesh")  # another body: its own mesh levels (recorded with the curve)
         base = plate["provenance"]["settings"]
         diff = [f"{k} {base[k]!r} (plate) vs {got[k]!r}" for k in sorted(base)
                 if k not in ignore and k in got and base[k] != got[k]]
@@ -566,6 +568,13 @@ def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict |
             raise ValueError(f"{path.parent}: settings differ from the plate folder's: "
                              + "; ".join(diff))
     return _recorded_curve(path, f"{design} {key}@0.5mm/s", summary)
+
+
+def _class_mesh(design: str, key: str, root: Path) -> str:
+    from softhand.fem.sweep import read_summary
+
+    mesh = read_summary(class_curve(design, key, root).parent)["provenance"]["settings"]["mesh"]
+    return mesh if isinstance(mesh, str) else "custom"
 
 
 def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str | Path, *,
@@ -600,9 +609,10 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
         pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=reference_mass_kg, initial=initial)
+        mesh = "default" if key == PLATE_CLASS else _class_mesh(design, key, root)
         out[key] = ClassLaw(key, skin, pair, INDENTERS[key.split("/")[1]],
                             tissue_counterpart(key), {"label": curve.label,
-                                                      "sha256": curve.sha256})
+                                                      "sha256": curve.sha256, "mesh": mesh})
     return out
 
 
