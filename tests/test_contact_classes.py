@@ -90,3 +90,63 @@ def test_the_tissue_finger_law_is_the_plate_law_times_the_shape_ratio():
         tissue_class_law(tissue, "edge")
     with pytest.raises(ValueError, match="plate and finger FE curves"):
         tissue_class_law(tissue, "finger")
+
+
+@pytest.fixture(scope="module")
+def envs():
+    from softhand.envs.handshake import HandshakeEnv
+
+    return {mode: HandshakeEnv(contact_laws=mode) for mode in ("geometry", "plate")}
+
+
+def test_each_pair_takes_the_law_of_its_class(envs):
+    """The shipped pocket2-sil has a law for every class; each pair carries its class's law in
+    geometry mode and the plate law in plate mode; the pair's class is that of its two geoms."""
+    from softhand.envs.skins import series_law
+    from softhand.skin.files import load_calibration
+
+    cal = load_calibration("pocket2-sil")
+    assert set(cal.pair_laws) == set(CLASSES)
+    geo, plate = envs["geometry"], envs["plate"]
+    m = geo.model
+    seen = set()
+    for pid in range(m.npair):
+        name = m.pair(pid).name
+        g = geo.pair_laws[name]
+        assert g.contact == classify(m, int(m.pair_geom1[pid]), int(m.pair_geom2[pid]))
+        assert g.law == g.contact and g.params == cal.pair_laws[g.contact].pair.params
+        assert plate.pair_laws[name].law == "plate"
+        assert plate.pair_laws[name].params == series_law("pocket2-sil")
+        seen.add(g.contact)
+    assert seen == set(CLASSES)
+
+
+def test_a_finger_presses_a_phalanx_softer_than_a_plate_at_equal_depth():
+    """Physics of the class laws (FE: cylinder/plate 0.72-0.81 for pocket2-sil at 0.5-2 mm, the
+    tissue's finger law softer too): the skin-and-tissue pair under a finger carries less force
+    than under the plate at every depth, and more than 0.3x (Hertz / elastic-foundation bound)."""
+    from softhand.skin.files import load_calibration
+
+    cal = load_calibration("pocket2-sil")
+    d = np.array([0.5, 1.0, 2.0, 4.0])
+    plate = cal.pair_law.params.force(d)
+    finger = cal.pair_laws["phalanx/finger"].pair.params.force(d)
+    assert np.all(finger < plate) and np.all(finger > 0.3 * plate)
+    skin = cal.pair_laws["phalanx/finger"].law
+    t = d / 0.5
+    assert np.all(skin.force(t, d) < cal.law.force(t, d))
+
+
+@pytest.mark.slow
+def test_the_accounting_by_law_holds_all_the_pair_force(envs):
+    """by_law_Ns adds up to the pair force (skin law and tissue-only) of the episode, and names
+    only laws the scene's pairs carry."""
+    from softhand.envs.run import run_handshake
+
+    env = envs["geometry"]
+    acc = run_handshake(env=env, seed=0).force_accounting()
+    assert sum(acc["by_law_Ns"].values()) == pytest.approx(
+        acc["skin_law_Ns"] + acc["tissue_law_only_Ns"], rel=1e-9)
+    assert set(acc["by_law_Ns"]) <= {c.law for c in env.pair_laws.values()}
+    assert sum(acc["by_law_share_pct"].values()) == pytest.approx(100.0)
+    assert acc["contact_laws"] == "geometry"

@@ -318,3 +318,30 @@ def test_body_mesh_builds_either_body_and_names_what_it_refuses():
     with pytest.raises(ValueError, match=r"indenter = 'cylinder:8@45' on body 'palm'"):
         body_mesh("palm", "solid-sil", indenter="cylinder:8@45")
     check_body("phalanx", "cylinder:8@45")  # the phalanx has its full model
+
+
+@pytest.mark.slow
+def test_the_cli_indents_the_palm_and_refuses_what_its_quarter_cell_cannot_carry():
+    """`fe indent --body palm` runs the palm (named in the header, stiffer than the phalanx
+    under the same plate); an oblique cylinder, which needs a full model the palm does not have,
+    is refused in one line naming --body, before any work."""
+    import json
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    res = CliRunner().invoke(main, ["fe", "indent", "pocket2-sil", "--body", "palm",
+                                    "--indenter", "cylinder:9@45", "--mesh", "coarse"])
+    assert res.exit_code == 2
+    assert "--body palm" in res.output and "cylinder:9@45" in res.output
+    assert "Traceback" not in res.output
+    args = ["fe", "indent", "solid-sil", "--mesh", "coarse", "--hold", "0", "--max-force",
+            "0.5", "--json"]
+    palm = json.loads(CliRunner().invoke(main, [*args, "--body", "palm"]).output)
+    phalanx = json.loads(CliRunner().invoke(main, args).output)
+    assert palm["body"] == "palm" and phalanx["body"] == "phalanx"
+    assert palm["displacement_at_2N_mm"] is None  # the ramp stops at 0.5 N
+    d_palm = palm["displacement_mm"][-1]
+    d_phalanx = phalanx["displacement_mm"][-1]
+    assert d_palm < 0.5 * d_phalanx  # the confined slab: 5-50x stiffer (module docstring)
