@@ -209,7 +209,8 @@ def test_one_range_warning_per_episode_with_its_summary_at_the_callers_line(wrap
                                f"{summary['steps']} steps: {summary['contact_steps']} "
                                f"contact-steps on {summary['pairs']} pair(s)")
         assert (f"pair {summary['worst_pair']}, carried {summary['worst_force_N']:.2f} N" in text
-                and "7 N its law (pocket2-sil in series with human tissue)" in text)
+                and "7 N its law (pocket2-sil in series with human tissue, "
+                f"{env.unwrapped.pair_laws[summary['worst_pair']].law} law)" in text)
     env.close()
 
 
