@@ -248,13 +248,7 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
                         floor_rows.append(e)
     elems = np.array(elems)
     keep = ~np.array(void)
-    # renumber to the used nodes only
-    flat_coords = coords.reshape(-1, dim)
-    used = np.unique(elems[keep])
-    new_id = -np.ones(flat_coords.shape[0], dtype=np.int64)
-    new_id[used] = np.arange(len(used))
-    X = flat_coords[used]
-    conn_all = new_id[elems]
+    X, conn_all, _ = compact_nodes(coords.reshape(-1, dim), elems, keep)
 
     npf = 3 ** (dim - 1)
     face_hi = [a for a, p in enumerate(local) if p[0] == 2]  # xi0 = +1
@@ -280,6 +274,17 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
         symmetry_factor=2.0 if dim == 2 else 4.0,
         length_mm=geom.length_mm if dim == 2 else 1.0, spec=spec,
     )
+
+
+def compact_nodes(coords: np.ndarray, elems: np.ndarray, keep: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Renumber a structured grid to the nodes the kept elements use: their coordinates, every
+    element's connectivity in the new numbering, and the new number of each old node (-1 for a
+    node no kept element uses)."""
+    used = np.unique(elems[keep])
+    new_id = -np.ones(coords.shape[0], dtype=np.int64)
+    new_id[used] = np.arange(len(used))
+    return coords[used], new_id[elems], new_id
 
 
 def full_model(mesh: Mesh) -> Mesh:

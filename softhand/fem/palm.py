@@ -54,7 +54,7 @@ import numpy as np
 
 from softhand.fem.elements import reference_element
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
-from softhand.fem.mesh import Mesh, _graded, _level_lines, _with_midpoints
+from softhand.fem.mesh import Mesh, _graded, _level_lines, _with_midpoints, compact_nodes
 from softhand.paper import paper
 from softhand.validate import check_number
 
@@ -368,12 +368,7 @@ def palm_mesh(design: str | Design, geometry: PalmGeometry | None = None,
                     floor_rows.append(e)
     elems = np.array(elems)
     keep = ~np.array(void)
-    flat = coords.reshape(-1, dim)
-    used = np.unique(elems[keep])
-    new_id = -np.ones(flat.shape[0], dtype=np.int64)
-    new_id[used] = np.arange(len(used))
-    X = flat[used]
-    conn_all = new_id[elems]
+    X, conn_all, new_id = compact_nodes(coords.reshape(-1, dim), elems, keep)
     npf = 3 ** (dim - 1)
     face_hi = [a for a, p in enumerate(local) if p[0] == 2]
     face_lo = [a for a, p in enumerate(local) if p[0] == 0]
