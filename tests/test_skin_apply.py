@@ -123,3 +123,32 @@ def test_bad_input_names_the_value_and_changes_nothing(geoms, kwargs, needle):
     with pytest.raises(ValueError, match=needle.replace("(", r"\(").replace("[", r"\[")):
         apply_skin(spec, geoms, **kwargs)
     assert spec.to_xml() == before
+
+
+def test_each_pair_takes_the_law_of_its_contact_class():
+    """A round skinned geom (a fingertip capsule) pressed by the box plate takes the shipped plate
+    law; pressed by a finger-sized capsule (the hand's own thumb, named with --against), the
+    skin's finger law, softer at equal depth (FE: 0.72-0.81x the plate's for pocket2-sil). The
+    choice is recorded per pair."""
+    from softhand.skin.files import load_calibration
+
+    spec = mujoco.MjSpec.from_file(str(HAND))
+    (tip,) = apply_skin(spec, {"index_tip": "pocket2-sil"}, against=["plate", "thumb_tip"])
+    assert tip.pair_laws == {"skin_index_tip__plate": "phalanx/flat",
+                             "skin_index_tip__thumb_tip": "phalanx/finger"}
+    from softhand.paths import SKINS_DIR
+    from softhand.skin.apply import _class_law
+    from softhand.skin.rig import pair_law_values
+
+    cal = load_calibration("pocket2-sil")
+    finger = _class_law("pocket2-sil", "phalanx/finger", None, SKINS_DIR)
+    # at 2-3 mm, where both 0-20 N soft contacts follow their laws (below 1 mm a single soft
+    # contact cannot follow a pocket's soft start: README, "what 20 N cost")
+    d = np.array([2.0, 2.5, 3.0])
+    assert np.all(finger.force(d) < cal.soft_contact.force(d))
+    model = spec.compile()
+    for name, law in (("skin_index_tip__plate", cal.soft_contact),
+                      ("skin_index_tip__thumb_tip", finger)):
+        solref, solimp = pair_law_values(model, name, law)
+        np.testing.assert_allclose(spec.pair(name).solref, solref, rtol=1e-12)
+        np.testing.assert_allclose(spec.pair(name).solimp, solimp, rtol=1e-12)

@@ -145,17 +145,19 @@ def _law(design: str, max_force_N: float | None, skins_dir, fe_dir) -> SoftConta
 
 def _class_law(design: str, key: str, max_force_N: float | None, skins_dir
                ) -> SoftContactParams | None:
-    """The skin's own soft contact for contact class ``key`` (a rigid counterpart): fitted in
-    closed form to the loading ramp of the class's law (to ``max_force_N``, default 20 N);
+    """The skin's own soft contact for contact class ``key`` (a rigid counterpart): fitted to the
+    loading ramp of the class's law (to ``max_force_N``, default 20 N);
     None when the skin has no law of that class."""
     from softhand.skin.calibrate import law_curve
     from softhand.skin.files import load_calibration
 
-    c = load_calibration(design, skins_dir).pair_laws.get(key)
+    cal = load_calibration(design, skins_dir)
+    c = cal.pair_laws.get(key)
     if c is None:
         return None
     _, d, f = loading_ramp(law_curve(c.law), max_force_N or MAX_FORCE_RANGE_N[1])
-    return fit_soft_contact(d, f).params
+    # one start from the skin's plate soft contact (the multi-start search takes ~20 s)
+    return fit_soft_contact(d, f, initial=cal.soft_contact).params
 
 
 def skin_law_error(design: str, law: SoftContactParams, *, top_N: float = REFERENCE_FORCE_N,
