@@ -84,6 +84,8 @@ class Assembler:
         self._nnz = keys.size
         self.groups = [np.flatnonzero(mesh.layer == k) for k in range(len(materials))]
         self.n_qp = ref.weights.size
+        #: (free dofs, their block's pattern) of the last :meth:`_free_pattern` call
+        self._free_cache: tuple[np.ndarray, tuple] | None = None
 
     def close(self) -> None:
         """Stop the element threads (the assembler stays usable, single-threaded)."""
@@ -202,7 +204,7 @@ class Assembler:
     def _free_pattern(self, free: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Which entries of the full pattern lie in the free-free block, and that block's CSR
         column indices and row pointers (cached for the last ``free``)."""
-        cached = getattr(self, "_free_cache", None)
+        cached = self._free_cache
         if cached is not None and np.array_equal(cached[0], free):
             return cached[1]
         n = self.mesh.n_dofs

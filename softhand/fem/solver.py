@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from softhand.fem.assembly import Assembler, ElementError, ElementState
+from softhand.fem.body import body_mesh, check_body
 from softhand.fem.contact import GapSet, RoundGaps, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
 from softhand.fem.indenter import parse_indenter
@@ -136,8 +137,6 @@ class IndentationSettings:
         ind = parse_indenter(self.indenter)
         ind.check_mode(self.mode)
         object.__setattr__(self, "indenter", ind.text)
-        from softhand.fem.body import check_body
-
         check_body(self.body, ind.text)
         if self.body != "phalanx" and self.sensors:
             raise ValueError(f"sensors = {self.sensors!r}: embedded sensors are read on the "
@@ -302,8 +301,6 @@ class _Model:
         ind = parse_indenter(settings.indenter)
         whole = mesh is None and ind.full_model
         if mesh is None and settings.body != "phalanx":
-            from softhand.fem.body import body_mesh
-
             mesh = body_mesh(settings.body, design, settings.mesh,
                              dim=3 if settings.mode == "3d" else 2, indenter=settings.indenter)
         if mesh is None:

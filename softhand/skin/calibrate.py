@@ -539,9 +539,10 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
 
 
 def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict | None
-                        ) -> Curve | None:
-    """The FE curve of ``design`` for class ``key``, checked against its folder's summary (the
-    settings of the plate folder but for the indenter, the body and the hold), or None."""
+                        ) -> tuple[Curve, str] | None:
+    """The FE curve of ``design`` for class ``key`` and its mesh level, checked against its
+    folder's summary (the settings of the plate folder but for the indenter, the body and the
+    hold), or None."""
     from softhand.fem.sweep import read_summary
 
     path = class_curve(design, key, fe_dir)
@@ -567,14 +568,11 @@ def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict |
         if diff:
             raise ValueError(f"{path.parent}: settings differ from the plate folder's: "
                              + "; ".join(diff))
-    return _recorded_curve(path, f"{design} {key}@0.5mm/s", summary)
+    return _recorded_curve(path, f"{design} {key}@0.5mm/s", summary), _mesh_name(got)
 
 
-def _class_mesh(design: str, key: str, root: Path) -> str:
-    from softhand.fem.sweep import read_summary
-
-    mesh = read_summary(class_curve(design, key, root).parent)["provenance"]["settings"]["mesh"]
-    return mesh if isinstance(mesh, str) else "custom"
+def _mesh_name(settings: dict) -> str:
+    return settings["mesh"] if isinstance(settings.get("mesh"), str) else "custom"
 
 
 def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str | Path, *,
@@ -596,20 +594,21 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
     tissues = {"flat": tissue, "finger": None}
     if ref_finger is not None and ref_plate.exists():
         ref = _recorded_curve(ref_plate, f"{TISSUE_REFERENCE_DESIGN}@0.5mm/s", plate)
-        tissues["finger"] = tissue_class_law(tissue, "finger", ref, ref_finger)
+        tissues["finger"] = tissue_class_law(tissue, "finger", ref, ref_finger[0])
     out: dict[str, ClassLaw] = {}
     for key in CLASSES:
         t = tissues[tissue_counterpart(key)]
-        curve = plate_curve if key == PLATE_CLASS else _class_folder_curve(design, key, root,
-                                                                              plate)
-        if t is None or curve is None:
+        found = ((plate_curve, "default" if plate is None else _mesh_name(
+            plate["provenance"]["settings"])) if key == PLATE_CLASS
+                 else _class_folder_curve(design, key, root, plate))
+        if t is None or found is None:
             continue
+        curve, mesh = found
         skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
         top = float(curve.force_N.max())
         pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=reference_mass_kg, initial=initial)
-        mesh = "default" if key == PLATE_CLASS else _class_mesh(design, key, root)
         out[key] = ClassLaw(key, skin, pair, INDENTERS[key.split("/")[1]],
                             tissue_counterpart(key), {"label": curve.label,
                                                       "sha256": curve.sha256, "mesh": mesh})

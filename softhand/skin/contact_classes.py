@@ -44,8 +44,8 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
 __all__ = ["BODIES", "CLASSES", "COUNTERPARTS", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM",
            "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_REFERENCE_DESIGN",
-           "class_curve", "classify", "fit_class_law", "geom_shape", "tissue_class_law",
-           "tissue_counterpart"]
+           "class_curve", "classify", "fit_class_law", "geom_shape", "shape_ratio",
+           "tissue_class_law", "tissue_counterpart"]
 
 BODIES = ("phalanx", "palm")
 COUNTERPARTS = ("flat", "finger")
