@@ -1,6 +1,6 @@
 """The data flow of the design is the import graph: a stage imports only the stages before it.
 
-Stages, in order (README, Layout): fem -> laws -> skin -> sensors (branching off the FE) -> hands
+Stages, in order (docs/architecture.md): fem -> laws -> skin -> sensors (branching off the FE) -> hands
 -> envs -> viz, then the benchmarks and the command line above them all. The base modules (paths,
 io, validate, paper, parallel, warn, the package itself) may be imported by every stage.
 """

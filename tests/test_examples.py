@@ -31,7 +31,7 @@ def test_skin_in_mujoco_example(capsys):
     out = _load("skin_in_mujoco").main("pocket2-sil")
     # the relaxation pad follows the law's spline exactly (measured within 0.02 N); one
     # solref/solimp fitted over the whole 0-20 N ramp cannot follow the open pocket's soft start
-    # (measured 0.041 N against the FE's 0.144 N at 1 mm, 0.543 against 0.383 N at 2 mm; README)
+    # (measured 0.041 N against the FE's 0.144 N at 1 mm, 0.543 against 0.383 N at 2 mm; docs/mujoco.md)
     for key in ("F_1mm", "F_2mm"):
         assert abs(out["soft-contact+relaxation"][key] - out["FE"][key]) < 0.03
         assert abs(out["soft-contact"][key] - out["FE"][key]) < 0.2
@@ -54,7 +54,7 @@ def test_handshake_force_regulating_example(capsys):
 def test_handshake_open_loop_example(capsys):
     """A short close command loads the hand where the partner's hand lies (the palm and the
     thumb); skins change the peaks. (Closed for 0.8 s the fingers reach 43 deg; index and middle
-    meet the partner's hand: README, Handshake.)"""
+    meet the partner's hand: docs/handshake.md.)"""
     out = _load("handshake_open_loop").main(0.6)
     for design in ("rigid", "pocket2-sil"):
         assert max(out[design][r] for r in ("Palm1", "Palm2", "Thumb1", "Thumb2")) > 2.0

@@ -1,6 +1,6 @@
 """Agreement with the paper at the default 3D mesh (numbers from softhand/data/paper.json).
 
-Tolerances are the ones promised in the README: displacement at 2 N within 15 % for the six
+Tolerances are the ones promised in the docs (docs/designs.md): displacement at 2 N within 15 % for the six
 single-material designs; layered solid designs change the homogeneous result with the paper's
 sign and within 5 percentage points; 2 mm pocket forces at 2 mm within 20 %. pocket2-sil's force
 at 2 mm chose the unstated roof thickness (geometry.py), so that one is a fit, not a prediction.

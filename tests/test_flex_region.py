@@ -1,6 +1,6 @@
 """A flex pad on the articulated prosthetic hand, its contact patch, and the FE's contact area.
 
-The claims (README, "Flex on the hand"): the shipped flex pad on a phalanx of the hand follows
+The claims (docs/mujoco.md, "Flex on the hand"): the shipped flex pad on a phalanx of the hand follows
 the same pad on the rig's fixed base within 1 % RMS of 2 N in both postures (measured 0.29 and
 0.62 % for solid-pu at 2 mm/s); the contact patch's pressure integrates to the plate force; the
 FE's pressure integrates to its plate force, and a pocket spreads the 2 N over a larger area.
@@ -142,7 +142,7 @@ def test_bench_flex_writes_its_report(tmp_path):
     assert row == json.loads(json.dumps(data["rows"][0]))
     for posture in POSTURES:
         v = row["postures"][posture]
-        assert v["vs_rig_rms_pct_of_2N"] < 1.0  # README: 0.05 / 0.61 %
-        assert v["vs_fe_rms_pct_of_2N"] < 2.0  # README: 1.0 / 0.9 % (the flex fit's own error)
+        assert v["vs_rig_rms_pct_of_2N"] < 1.0  # reports/bench-flex.md: 0.05 / 0.61 %
+        assert v["vs_fe_rms_pct_of_2N"] < 2.0  # reports/bench-flex.md: 1.0 / 0.9 % (the flex fit's own error)
         assert v["peak_N"] >= 2.0
     assert "| solid-pu | extended |" in (tmp_path / "bench-flex.md").read_text()

@@ -2,7 +2,7 @@
 
 The signal is sent the way a terminal sends it: to every process of the group, workers included.
 The timeouts below only guard against a hang (a worker left running would take minutes); how fast a
-batch stops is measured by hand and reported in the README, not asserted.
+batch stops is measured by hand (docs/reliability.md), not asserted.
 """
 
 from __future__ import annotations

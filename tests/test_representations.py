@@ -99,7 +99,7 @@ def test_relaxation_on_the_hand_runs_a_handshake_and_is_the_written_mjcf():
     force along a pad's axis goes through the skin's law: 55 % of the force between the hands in
     the old clearance-rule scene, 38 % in the grasp solved from the handshake's contacts (fingers
     cross the pads from the side); the rest meets the tissue's law alone, which the accounting
-    reports (README: a shortfall of the pads in a real handshake). The MJCF of the spec loads in
+    reports (docs/handshake.md: a shortfall of the pads in a real handshake). The MJCF of the spec loads in
     plain MuJoCo."""
     from softhand.envs.models import skinned_scene_spec
     from softhand.envs.run import run_handshake

@@ -5,7 +5,7 @@
   1e-5 N, carried on by the hereditary sums: 5e-5 N);
 * the fit recovers a known law (dead band, share, kernel) from synthetic records;
 * the shipped transfer laws exist for every design and placement, match the FE records they were
-  fitted to and validated on within the README's tolerances, and keep the FE's dead band: a
+  fitted to and validated on within the docs' tolerances (docs/sensors.md), and keep the FE's dead band: a
   pocket-floor law reads exactly 0 until the pocket closes;
 * the electronics: latency, sampling, threshold, saturation, quantization, seeded noise,
   hysteresis, each against its exact answer;
@@ -28,7 +28,7 @@ from softhand.sensors.calibrate import load_transfer_laws, read_records
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec, TransferBank
 from softhand.sensors.transfer import SensorRecord, ShareKernel, TransferLaw, fit_transfer
 
-#: the README's claims for the shipped laws, % of the reading at the 20 N peak (fitted at
+#: the claims for the shipped laws (docs/sensors.md), % of the reading at the 20 N peak (fitted at
 #: 0.5 mm/s and validated at 2 mm/s alike), and up to 2 N in % of the reading at 2 N
 RMS_PCT, RAMP_MAX_PCT, HOLD_MAX_PCT, TO_2N_PCT = 1.0, 2.5, 2.0, 6.0
 

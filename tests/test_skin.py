@@ -69,7 +69,8 @@ def test_soft_contact_fit_recovers_known_parameters():
 def test_shipped_soft_contact_follows_every_fe_loading_curve_to_20_newtons_within_5_percent():
     """The shipped solref/solimp of each design against its whole 0-20 N FE ramp (closed-form rest
     law): the impedance sigmoid cannot follow a pocket's soft start and closing knee exactly
-    (README: up to 4.5 % of 2 N below 2 N). Refitting is covered by the calibration test."""
+    (calibration/skins/*.json, soft-contact rms_pct_of_2N_to_2N: up to 4.5 % of 2 N below 2 N).
+    Refitting is covered by the calibration test."""
     worst_low = worst_high = 0.0
     for path in sorted(FE.glob("*.csv")):
         _, d, f = loading_ramp(load_curve(path))

@@ -143,7 +143,7 @@ def test_each_pair_takes_the_law_of_its_contact_class():
     cal = load_calibration("pocket2-sil")
     finger = _class_law("pocket2-sil", "phalanx/finger", None, SKINS_DIR)
     # at 2-3 mm, where both 0-20 N soft contacts follow their laws (below 1 mm a single soft
-    # contact cannot follow a pocket's soft start: README, "what 20 N cost")
+    # contact cannot follow a pocket's soft start: docs/mujoco.md, "What one soft contact can and cannot do")
     d = np.array([2.0, 2.5, 3.0])
     assert np.all(finger.force(d) < cal.soft_contact.force(d))
     model = spec.compile()
