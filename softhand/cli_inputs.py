@@ -191,6 +191,12 @@ _OPT_BODY = click.option(
          "a metacarpal; plate, sphere, cylinder at 0 or 90 deg; no embedded sensors).")
 
 
+_OPT_ENGINE = click.option(
+    "--engine", type=click.Choice(["compiled", "numpy"]), default="compiled", show_default=True,
+    help="Element engine: compiled (numba kernels, one Cholesky analysis per run) or numpy (the "
+         "reference). The same curves within the Newton tolerance; numpy is about 2x slower.")
+
+
 def cpus_allowed(ctx, param, value):
     """--threads / --workers: at most the CPUs this process may run on (more only queue)."""
     from softhand.parallel import available_cpus
@@ -238,7 +244,8 @@ def check_threads_or_cluster(threads: int | None, cluster: str | None,
 
 
 FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_BODY, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
-              _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
+              _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS,
+              _OPT_ENGINE)
 EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,
                   _OPT_FORCE, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 

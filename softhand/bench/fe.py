@@ -2,6 +2,11 @@
 
 Measures, in one process on this machine:
 
+* the two element engines side by side (``IndentationSettings.engine``): the NumPy reference
+  (batched NumPy elements, SuperLU ordering and factorizing every tangent) against the compiled
+  engine (numba kernels, CHOLMOD on the run's fixed pattern), on one 3D design to 2 N, runs
+  interleaved (reference, compiled, reference, ...) so that a drift of the machine hits both;
+  with the Newton iterations and the largest difference between their force curves;
 * one 3D design to 2 N at the default mesh (ramp only), and the same with the 10 s hold;
 * the same ramp with every core of the machine busy with other work (an external CPU load of one
   busy process per core, started and stopped by the benchmark), at the default ``--threads`` and
@@ -78,6 +83,7 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
     ramp = IndentationSettings(hold_s=0.0)
     machine = machine_info()
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
+    data["engines"] = _engines(repeats=2 if quick else 3)
     one = indent("pocket2-sil", ramp)
     one_hold = indent("pocket2-sil", IndentationSettings())
     data["one_design"] = {"design": "pocket2-sil", "ramp_wall_s": one.wall_s,
@@ -143,6 +149,55 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
     return md
 
 
+def _engines(repeats: int) -> dict[str, Any]:
+    """Reference and compiled engine on pocket2-sil, 3D default mesh, ramp to 2 N and the
+    ramp with the 10 s hold, interleaved ``repeats`` times; median walls."""
+    out: dict[str, Any] = {"design": "pocket2-sil", "repeats": repeats,
+                           "threads": default_threads()}
+    for label, hold in (("ramp", 0.0), ("ramp_hold", 10.0)):
+        walls: dict[str, list[float]] = {"numpy": [], "compiled": []}
+        last: dict[str, Any] = {}
+        for _ in range(repeats if label == "ramp" else 1):
+            for engine in ("numpy", "compiled"):
+                r = indent("pocket2-sil", IndentationSettings(hold_s=hold, engine=engine))
+                walls[engine].append(r.wall_s)
+                last[engine] = r
+        ref, new = last["numpy"], last["compiled"]
+        same_points = ref.force_N.shape == new.force_N.shape
+        out[label] = {
+            engine: {"wall_s": sorted(w)[len(w) // 2], "walls_s": w,
+                     "newton_iterations": int(sum(x["iterations"] for x in last[engine].log)),
+                     "steps": len(last[engine].log),
+                     "d2N_mm": last[engine].displacement_at(2.0)}
+            for engine, w in walls.items()}
+        out[label]["speedup"] = (out[label]["numpy"]["wall_s"]
+                                 / out[label]["compiled"]["wall_s"])
+        out[label]["max_force_difference_N"] = (
+            float(abs(ref.force_N - new.force_N).max()) if same_points else None)
+        out[label]["same_steps"] = same_points
+    return out
+
+
+def _engine_lines(d: dict[str, Any]) -> list[str]:
+    e = d.get("engines")
+    if not e:
+        return []
+    lines = [f"The two element engines on {e['design']} (3D, default mesh, "
+             f"{e['threads']} threads), interleaved, median of {e['repeats']} ramps "
+             "(the ramp with the hold: one run each):", "",
+             "| run | reference (NumPy, SuperLU) s | compiled (numba, CHOLMOD) s | speed-up "
+             "| Newton iterations (ref / compiled) | largest force difference (N) |",
+             "|---|---|---|---|---|---|"]
+    for label, name in (("ramp", "ramp to 2 N"), ("ramp_hold", "ramp + 10 s hold")):
+        r = e[label]
+        diff = r["max_force_difference_N"]
+        lines.append(f"| {name} | {r['numpy']['wall_s']:.1f} | {r['compiled']['wall_s']:.1f} | "
+                     f"{r['speedup']:.2f}x | {r['numpy']['newton_iterations']} / "
+                     f"{r['compiled']['newton_iterations']} | "
+                     f"{'different steps' if diff is None else format(diff, '.1e')} |")
+    return lines
+
+
 def _markdown(d: dict[str, Any]) -> str:
     def f(v, spec=".3f"):
         return "" if v is None else format(v, spec)
@@ -150,7 +205,8 @@ def _markdown(d: dict[str, Any]) -> str:
     lines = [
         "# FE benchmark (`softhand bench fe`)", "",
         machine_line({"git_revision": d["git_revision"], **d["machine"]}), "",
-        "| what | wall (s) |", "|---|---|",
+        *_engine_lines(d), "",
+        "| what (compiled engine) | wall (s) |", "|---|---|",
         f"| one 3D design (pocket2-sil) to 2 N, default mesh | {d['one_design']['ramp_wall_s']:.1f} |",
         f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",
         f"| 12-design sweep, 3D, ramp + hold | {d['sweep_3d']['wall_s']:.1f} |",

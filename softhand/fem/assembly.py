@@ -26,7 +26,11 @@ from softhand.fem.materials import Material, ViscoState, voigt_to_tensor
 from softhand.fem.mesh import Mesh
 from softhand.parallel import check_threads
 
-__all__ = ["Assembler", "ElementState"]
+__all__ = ["ENGINES", "Assembler", "ElementState"]
+
+#: element engines: ``"compiled"`` (numba kernels, :mod:`softhand.fem.kernels`) and ``"numpy"``
+#: (the batched NumPy reference of this module); the same arithmetic, equal to rounding
+ENGINES = ("compiled", "numpy")
 
 _VOIGT = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))
 
@@ -55,10 +59,15 @@ class Assembler:
             kernels, so 2 threads on 2 cores take about 0.6x the time); default:
             :func:`softhand.parallel.default_threads`. The caller keeps BLAS single-threaded
             (:func:`softhand.parallel.single_threaded_blas`): these threads own the cores.
+        engine: one of :data:`ENGINES`.
     """
 
-    def __init__(self, mesh: Mesh, materials: list[Material], threads: int | None = None) -> None:
+    def __init__(self, mesh: Mesh, materials: list[Material], threads: int | None = None,
+                 engine: str = "compiled") -> None:
         threads = check_threads(threads)
+        if engine not in ENGINES:
+            raise ValueError(f"engine = {engine!r}: allowed {', '.join(ENGINES)}")
+        self.engine = engine
         self.threads = threads
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
         self.mesh = mesh
@@ -86,6 +95,13 @@ class Assembler:
         self.n_qp = ref.weights.size
         #: (free dofs, their block's pattern) of the last :meth:`_free_pattern` call
         self._free_cache: tuple[np.ndarray, tuple] | None = None
+        #: the scatter in the compiled tangent's entry order (n, i, j, m) per element
+        nd_ = nn * dim
+        self._scatter_nijm = (self._scatter.reshape(ne, nn, dim, nn, dim)
+                              .transpose(0, 1, 2, 4, 3).reshape(ne, nd_ * nd_))
+        #: the shape-function gradients as (element, (q, d), m) for the compiled tangent
+        self._G_qdm = np.ascontiguousarray(
+            self.dNdX.transpose(0, 1, 3, 2).reshape(ne, self.n_qp * dim, nn))
 
     def close(self) -> None:
         """Stop the element threads (the assembler stays usable, single-threaded)."""
@@ -130,6 +146,8 @@ class Assembler:
         Raises:
             ElementError: an element is inverted at this displacement.
         """
+        if self.engine == "compiled":
+            return self._evaluate_compiled(u, state, dt)
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
         nq = self.n_qp
@@ -170,6 +188,87 @@ class Assembler:
         self._element_forces = fe  # of the last evaluation, for force_of()
         f = np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=mesh.n_dofs)
         return f, lambda free=None: self._tangent(F, D, S, free), ElementState(new_groups)
+
+    def _evaluate_compiled(self, u: np.ndarray, state: ElementState, dt: float):
+        """:meth:`evaluate` on the compiled kernels (:mod:`softhand.fem.kernels`)."""
+        import numba
+
+        from softhand.fem import kernels
+
+        numba.set_num_threads(min(self.threads, numba.config.NUMBA_NUM_THREADS))
+        mesh, dim = self.mesh, self.mesh.dim
+        ne, nn = mesh.elements.shape
+        nq = self.n_qp
+        u = np.ascontiguousarray(u, dtype=float)
+        fe = np.empty((ne, nn * dim))
+        F = np.empty((ne, nq, 3, 3))
+        S = np.empty((ne, nq, 6))
+        D = np.empty((ne, nq, 6, 6))
+        new_groups: list[ViscoState | None] = []
+        bad = 0
+        for mat, idx, hist in zip(self.materials, self.groups, state.groups, strict=True):
+            if idx.size == 0:
+                new_groups.append(hist)
+                continue
+            hf = mat.hyperfoam
+            visco = mat.prony is not None and hist is not None
+            if visco:
+                if not dt >= 0.0:
+                    raise ValueError(f"dt = {dt!r} must be >= 0")
+                decay, ramp = mat.prony.step_factors(dt)
+                g = np.asarray(mat.prony.g, dtype=float)
+                S0_old, H_old = hist.S0, hist.H
+                new = ViscoState(np.empty_like(S0_old), np.empty_like(H_old))
+            else:
+                decay = ramp = g = np.zeros(0)
+                S0_old = np.zeros((0, 6))
+                H_old = np.zeros((0, 0, 6))
+                new = None
+            bad += kernels.evaluate_group(
+                u, mesh.elements, dim, idx, self.dNdX, self.wdet,
+                np.asarray(hf.mu, dtype=float), np.asarray(hf.alpha, dtype=float),
+                float(hf.beta), g, np.ascontiguousarray(decay, dtype=float),
+                np.ascontiguousarray(ramp, dtype=float), S0_old, H_old, visco, fe, F, S, D,
+                np.zeros((0, 6)) if new is None else new.S0,
+                np.zeros((0, 0, 6)) if new is None else new.H)
+            new_groups.append(new)
+        if bad:
+            raise ElementError(f"{bad} Gauss points have det F <= 0 or an indefinite C")
+        self._element_forces = fe
+        f = np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=mesh.n_dofs)
+        return (f, lambda free=None, raw=False: self._tangent_compiled(F, D, S, free, raw),
+                ElementState(new_groups))
+
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Row and column of each entry of the tangent's data (``tangent_of(raw=True)``)."""
+        rows = np.repeat(np.arange(self.mesh.n_dofs), np.diff(self._indptr))
+        return rows, self._cols.astype(np.int64)
+
+    def _tangent_compiled(self, F: np.ndarray, D: np.ndarray, S: np.ndarray,
+                          free: np.ndarray | None = None, raw: bool = False):
+        """:meth:`_tangent` from the compiled element tangents (:func:`kernels.element_tangents`);
+        ``raw``: the data of the whole pattern (:meth:`pattern`) instead of a matrix."""
+        import numba
+
+        from softhand.fem import kernels
+
+        numba.set_num_threads(min(self.threads, numba.config.NUMBA_NUM_THREADS))
+        mesh, dim = self.mesh, self.mesh.dim
+        ne, nn = mesh.elements.shape
+        K = np.empty((ne, nn * dim * dim, nn))
+        kernels.element_tangents(F, S, D, self.dNdX, self.wdet, self._G_qdm, K)
+        data = np.bincount(self._scatter_nijm.ravel(), weights=K.ravel(), minlength=self._nnz)
+        return data if raw else self._assembled(data, free)
+
+    def _assembled(self, data: np.ndarray, free: np.ndarray | None) -> sp.spmatrix:
+        """The tangent from its pattern's data: whole (CSR), or its free-free block (CSC)."""
+        n = self.mesh.n_dofs
+        if free is None:
+            return sp.csr_matrix((data, self._cols, self._indptr), shape=(n, n))
+        sel, cols, indptr = self._free_pattern(free)
+        # the pattern is symmetric, so its CSR arrays are the CSC arrays of the transpose: the
+        # tangent's own transpose (symmetric to rounding)
+        return sp.csc_matrix((data[sel], cols, indptr), shape=(free.size, free.size))
 
     def force_of(self, elements: np.ndarray) -> np.ndarray:
         """Internal force vector of ``elements`` alone, at the last :meth:`evaluate`."""
@@ -248,10 +347,4 @@ class Assembler:
 
         parts = self._blocks(block, ne)
         data = parts[0] if len(parts) == 1 else np.sum(parts, axis=0)
-        if free is None:
-            return sp.csr_matrix((data, self._cols, self._indptr),
-                                 shape=(mesh.n_dofs, mesh.n_dofs))
-        sel, cols, indptr = self._free_pattern(free)
-        # the pattern is symmetric, so its CSR arrays are the CSC arrays of the transpose: the
-        # tangent's own transpose (symmetric to rounding)
-        return sp.csc_matrix((data[sel], cols, indptr), shape=(free.size, free.size))
+        return self._assembled(data, free)

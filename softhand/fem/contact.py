@@ -71,14 +71,23 @@ class GapSet:
         weights of the points whose gap is closed. Resolution: one Gauss point's weight."""
         return float(self.weight[self.gaps(u, shift) < 0.0].sum())
 
-    def add(self, u: np.ndarray, penalty: float, shift: float = 0.0):
-        """Residual vector and tangent matrix contributions, and the number of closed points."""
+    def penalty_forces(self, u: np.ndarray, penalty: float, shift: float = 0.0):
+        """Residual contribution, each point's penalty stiffness ``eps w [g < 0]`` (the
+        diagonal of the tangent :meth:`stiffness`) and the number of closed points."""
         g = self.gaps(u, shift)
         closed = g < 0.0
         lam = penalty * self.weight * np.where(closed, -g, 0.0)
         r = -(self.G.T @ lam)
-        K = self.G.T @ sp.diags(penalty * self.weight * closed) @ self.G
-        return r, K, int(closed.sum())
+        return r, penalty * self.weight * closed, int(closed.sum())
+
+    def stiffness(self, kw: np.ndarray) -> sp.csr_matrix:
+        """The tangent ``G^T diag(kw) G`` for the point stiffnesses of :meth:`penalty_forces`."""
+        return self.G.T @ sp.diags(kw) @ self.G
+
+    def add(self, u: np.ndarray, penalty: float, shift: float = 0.0):
+        """Residual vector and tangent matrix contributions, and the number of closed points."""
+        r, kw, n = self.penalty_forces(u, penalty, shift)
+        return r, self.stiffness(kw), n
 
 
 def _face_geometry(mesh: Mesh, faces: np.ndarray, n_gauss: int):

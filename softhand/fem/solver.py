@@ -22,11 +22,12 @@ from typing import Any
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from softhand.fem.assembly import Assembler, ElementError, ElementState
+from softhand.fem.assembly import ENGINES, Assembler, ElementError, ElementState
 from softhand.fem.body import body_mesh, check_body
 from softhand.fem.contact import GapSet, RoundGaps, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
 from softhand.fem.indenter import parse_indenter
+from softhand.fem.linear import TangentSystem
 from softhand.fem.materials import Material, Moduli, material
 from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh, full_model
 from softhand.fem.sensors import SensorPatch, SensorReader, default_patches
@@ -92,6 +93,10 @@ class IndentationSettings:
         threads: threads for element evaluation (None: :func:`softhand.parallel.default_threads`,
             the CPUs this process may use, at most 4); BLAS stays single-threaded during the run,
             so these threads are the run's only parallelism. Does not change the result.
+        engine: ``"compiled"`` (numba element kernels, :mod:`softhand.fem.kernels`, and the
+            tangent's fill-reducing ordering computed once per run) or ``"numpy"`` (the
+            batched NumPy reference and an ordering per factorization). The same arithmetic:
+            curves agree within the Newton tolerance (``softhand bench fe`` runs both).
         geometry: overrides of :class:`PhalanxGeometry` fields.
         sensors: embedded sensor patches (:class:`softhand.fem.sensors.SensorPatch`) read at
             every output time; None: a 4 x 4 mm patch under the indenter at each placement the
@@ -125,6 +130,7 @@ class IndentationSettings:
     tol_N: float = 1e-4
     tol_rel: float = 1e-4
     threads: int | None = None
+    engine: str = "compiled"
     geometry: dict[str, float] = field(default_factory=dict)
     materials: dict[str, dict] = field(default_factory=dict)
     sensors: tuple[SensorPatch, ...] | None = None
@@ -156,6 +162,8 @@ class IndentationSettings:
             raise ValueError(f"hold_s = {self.hold_s!r} must be finite and >= 0")
         if self.threads is not None:
             check_threads(self.threads)
+        if self.engine not in ENGINES:
+            raise ValueError(f"engine = {self.engine!r}: allowed {', '.join(ENGINES)}")
         if not np.isfinite(self.tol_rel) or self.tol_rel < 0:
             raise ValueError(f"tol_rel = {self.tol_rel!r} must be finite and >= 0")
         if self.force_step_N is not None and not self.force_step_N > 0:
@@ -311,7 +319,7 @@ class _Model:
                 self.mesh = full_model(self.mesh)
         else:
             self.mesh, top = mesh, float(mesh.X[:, 1].max())
-        self.asm = Assembler(self.mesh, mats, threads=settings.threads)
+        self.asm = Assembler(self.mesh, mats, threads=settings.threads, engine=settings.engine)
         n_gauss = settings.contact_points
         self.plate: GapSet | None = None
         self.round: RoundGaps | None = None
@@ -329,6 +337,7 @@ class _Model:
         if mesh is not None or whole:
             patches = ()  # sensor patches are placed on the phalanx's quarter mesh only
         self.sensors = SensorReader(self.mesh, geom, patches, n_gauss, self.penalty)
+        self._system: TangentSystem | None = None  # the compiled engine's, on first use
 
     def read_sensors(self, u: np.ndarray) -> dict[str, float]:
         """Each sensor patch's force at the state of the last converged Newton step."""
@@ -367,11 +376,11 @@ class _Model:
         for it in range(1, self.settings.max_newton + 1):
             f, tangent_of, new_state = self.asm.evaluate(u, state, dt)
             gaps, shift = self.contact(u, d)
-            rp, Kp, n_plate = gaps.add(u, self.penalty, shift)
+            rp, kw_p, n_plate = gaps.penalty_forces(u, self.penalty, shift)
             f += rp
-            n_pocket, Kc = 0, None
+            n_pocket, kw_c = 0, None
             if self.pocket is not None:
-                rc, Kc, n_pocket = self.pocket.add(u, self.penalty)
+                rc, kw_c, n_pocket = self.pocket.penalty_forces(u, self.penalty)
                 f += rc
             r = f[self.free]
             res = float(np.abs(r).max())
@@ -382,10 +391,17 @@ class _Model:
             # equilibrium of the penalty problem whatever the closed set did on the way here
             if res <= tol_N:
                 return u, new_state, it, history, (n_plate, n_pocket)
-            Kff = tangent_of(self.free) + _block(Kp, self.free)
-            if Kc is not None:
-                Kff = Kff + _block(Kc, self.free)
-            du = _solve(Kff, -r)
+            if self.settings.engine == "compiled":
+                contacts = [(kw_p, gaps.G.data)]
+                if kw_c is not None:
+                    contacts.append((kw_c, self.pocket.G.data))
+                system = self.tangent_system()
+                du = system.factorize(system.values(tangent_of(raw=True), contacts))(-r)
+            else:
+                Kff = tangent_of(self.free) + _block(gaps.stiffness(kw_p), self.free)
+                if kw_c is not None:
+                    Kff = Kff + _block(self.pocket.stiffness(kw_c), self.free)
+                du = _factor(Kff).solve(-r)
             if not np.all(np.isfinite(du)):
                 raise ElementError("linear solve returned non-finite values")
             step = 1.0
@@ -401,17 +417,27 @@ class _Model:
         raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
 
+    def tangent_system(self) -> TangentSystem:
+        """The compiled engine's fixed-pattern tangent (:mod:`softhand.fem.linear`), built on
+        first use: the elements' pattern and every contact set's couplings."""
+        if self._system is None:
+            template = (self.plate.G if self.plate is not None
+                        else self.round.linearised(np.zeros(self.mesh.n_dofs), 0.0).G)
+            contacts = [template] + ([self.pocket.G] if self.pocket is not None else [])
+            rows, cols = self.asm.pattern()
+            self._system = TangentSystem(rows, cols, self.free, self.mesh.n_dofs, contacts)
+        return self._system
+
 
 def _block(K, free: np.ndarray):
     """The free-free block of a sparse contact tangent, in CSC."""
     return K.tocsr()[free][:, free].tocsc()
 
 
-def _solve(K, b: np.ndarray) -> np.ndarray:
-    """Solve K x = b for the symmetric tangent (SuperLU in symmetric mode, no pivoting)."""
-    lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
-    return lu.solve(b)
+def _factor(K):
+    """SuperLU factors of the symmetric tangent (symmetric mode, no pivoting)."""
+    return spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True})
 
 
 def _material(name: str, s: IndentationSettings) -> Material:

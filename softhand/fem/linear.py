@@ -1,0 +1,156 @@
+"""The Newton tangent of one run in one fixed sparse pattern, factorized by CHOLMOD.
+
+Every tangent of a run is the free-free block of the elements' stiffness plus the penalty
+stiffness of the contact points that are closed, :math:`G^T \\operatorname{diag}(\\varepsilon w
+[g<0])\\, G` (:mod:`softhand.fem.contact`). So every tangent's pattern lies in one union known
+before the first step: the elements' pattern and, for each contact set, the couplings of each
+point's degrees of freedom. :class:`TangentSystem` builds that union's lower triangle once,
+analyses it once (CHOLMOD's symbolic factorization: fill-reducing ordering and supernodes), and
+then each Newton iteration only scatters numbers into it and runs the numeric supernodal
+Cholesky factorization (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; CHOLMOD as
+shipped in CVXOPT).
+
+Why CHOLMOD through CVXOPT: the tangent is symmetric, and positive definite at every iterate
+the solver has met, so Cholesky serves; CVXOPT ships CHOLMOD in binary wheels for Linux, macOS
+and Windows (no compiler, no SuiteSparse headers), and separates the symbolic analysis from the
+numeric factorization, which is what a fixed pattern needs. Measured on the 3D tangents of
+``pocket2-sil`` (4.9k free dofs): the numeric factorization takes about 0.6x SuperLU's time.
+
+A tangent that is not positive definite (CHOLMOD reports it) is solved by SuperLU in symmetric
+mode, as the NumPy reference engine solves every tangent.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["TangentSystem"]
+
+
+def _point_pairs(G: sp.csr_matrix, fmap: np.ndarray):
+    """Per contact point, the pairs of its entries on free dofs that fall in the lower
+    triangle: (point, entry a, entry b, row, column), grouped by point (CSR-like ``ptr``)."""
+    G = G.tocsr()
+    lengths = np.diff(G.indptr)
+    pts, ia, ib = [], [], []
+    for m in np.unique(lengths):
+        if m == 0:
+            continue
+        rows = np.flatnonzero(lengths == m)
+        ent = G.indptr[rows][:, None] + np.arange(m)  # (k, m) entry indices
+        a, b = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+        a, b = a.ravel(), b.ravel()
+        pts.append(np.repeat(rows, a.size))
+        ia.append(ent[:, a].ravel())
+        ib.append(ent[:, b].ravel())
+    if not pts:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty, empty, empty, np.zeros(G.shape[0] + 1, dtype=np.int64)
+    pt, ia, ib = np.concatenate(pts), np.concatenate(ia), np.concatenate(ib)
+    r, c = fmap[G.indices[ia]], fmap[G.indices[ib]]
+    keep = (r >= 0) & (c >= 0) & (r >= c)
+    pt, ia, ib, r, c = pt[keep], ia[keep], ib[keep], r[keep], c[keep]
+    order = np.argsort(pt, kind="stable")
+    pt, ia, ib, r, c = pt[order], ia[order], ib[order], r[order], c[order]
+    ptr = np.searchsorted(pt, np.arange(G.shape[0] + 1))
+    return pt, ia, ib, r, c, ptr
+
+
+class TangentSystem:
+    """The lower triangle of the free-free tangent in a pattern fixed for the run.
+
+    Args:
+        rows, cols: the elements' full pattern (one entry per stored value of the assembler's
+            tangent data, :meth:`softhand.fem.assembly.Assembler.tangent_data`).
+        free: the free dofs, sorted.
+        n_dofs: all dofs.
+        contacts: one template gap matrix per contact set (CSR, points x dofs); each later
+            gap matrix of that set must have the same structure (the same rows and columns,
+            values free).
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, free: np.ndarray, n_dofs: int,
+                 contacts: list[sp.csr_matrix]) -> None:
+        from cvxopt import cholmod, matrix, spmatrix
+
+        self._cholmod, self._matrix = cholmod, matrix
+        fmap = np.full(n_dofs, -1, dtype=np.int64)
+        fmap[free] = np.arange(free.size)
+        n = free.size
+        self.n = n
+        r, c = fmap[rows], fmap[cols]
+        keep = (r >= 0) & (c >= 0) & (r >= c)
+        self._src = np.flatnonzero(keep)
+        er, ec = r[keep], c[keep]
+        self._contacts = [_point_pairs(G, fmap) for G in contacts]
+        self._contact_nnz = [G.nnz for G in contacts]
+        all_r = np.concatenate([er] + [p[3] for p in self._contacts])
+        all_c = np.concatenate([ec] + [p[4] for p in self._contacts])
+        keys = all_c * n + all_r  # column-major: CSC order of the lower triangle
+        ukeys, inv = np.unique(keys, return_inverse=True)
+        self.nnz = ukeys.size
+        self._dst = inv[:er.size]
+        self._contact_dst = []
+        start = er.size
+        for p in self._contacts:
+            self._contact_dst.append(inv[start:start + p[0].size])
+            start += p[0].size
+        self._rows = (ukeys % n).astype(np.int64)
+        self._cols = (ukeys // n).astype(np.int64)
+        self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
+        probe = np.arange(self.nnz, dtype=float) + 1.0
+        A = spmatrix(matrix(probe), matrix(self._rows), matrix(self._cols), (n, n))
+        if not np.array_equal(np.asarray(A.V).ravel(), probe):  # CVXOPT keeps CSC order
+            raise RuntimeError("CHOLMOD matrix does not keep the pattern's order")
+        self._A = A
+        cholmod.options["supernodal"] = 2
+        self._symbolic = cholmod.symbolic(A, uplo="L")
+        self.stats = {"cholesky": 0, "superlu": 0}
+
+    def values(self, element_data: np.ndarray,
+               contacts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """The lower triangle's values: the elements' tangent data plus, per contact set,
+        ``(kw, G_data)``: each point's penalty stiffness ``eps * w * [g < 0]`` and its gap
+        matrix's values (in the template's structure)."""
+        vals = np.zeros(self.nnz)
+        vals[self._dst] = element_data[self._src]
+        for (pt, ia, ib, _, _, ptr), dst, nnz, (kw, gdata) in zip(
+                self._contacts, self._contact_dst, self._contact_nnz, contacts, strict=True):
+            if gdata.size != nnz:
+                raise ValueError(f"a gap matrix has {gdata.size} entries, its template {nnz}")
+            closed = np.flatnonzero(kw)
+            if closed.size == 0:
+                continue
+            counts = ptr[closed + 1] - ptr[closed]
+            sel = np.repeat(ptr[closed] - np.cumsum(np.r_[0, counts[:-1]]), counts) \
+                + np.arange(counts.sum())
+            vals += np.bincount(dst[sel], weights=kw[pt[sel]] * gdata[ia[sel]] * gdata[ib[sel]],
+                                minlength=self.nnz)
+        return vals
+
+    def factorize(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        """A function that solves K x = b for the symmetric K of lower triangle ``vals``,
+        valid until the next call."""
+        self._A.V = self._matrix(vals)  # A.V is a copy on reading: assign the whole
+        try:
+            self._cholmod.numeric(self._A, self._symbolic)
+        except ArithmeticError:  # not positive definite: LU as the reference engine does
+            self.stats["superlu"] += 1
+            L = sp.csc_matrix((vals, self._rows, self._indptr), shape=(self.n, self.n))
+            K = (L + L.T - sp.diags(L.diagonal())).tocsc()
+            lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+            return lu.solve
+        self.stats["cholesky"] += 1
+        F, cholmod, matrix = self._symbolic, self._cholmod, self._matrix
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            x = matrix(np.ascontiguousarray(b, dtype=float))
+            cholmod.solve(F, x)
+            return np.asarray(x).ravel()
+
+        return solve

@@ -1,0 +1,130 @@
+"""The compiled FE engine (numba kernels, CHOLMOD on a fixed pattern) against the NumPy
+reference: the same element arithmetic to rounding, the same curves within the Newton
+tolerance, and the linear algebra against SciPy's direct solve."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from softhand.fem.assembly import Assembler
+from softhand.fem.geometry import parse_design
+from softhand.fem.kernels import sym_eig3
+from softhand.fem.linear import TangentSystem
+from softhand.fem.materials import material
+from softhand.fem.mesh import build_mesh
+from softhand.fem.solver import IndentationSettings, indent
+
+
+def _smooth_field(X: np.ndarray, seed: int) -> np.ndarray:
+    """A smooth finite-strain displacement (a few percent strain, rotations included)."""
+    rng = np.random.default_rng(seed)
+    dim = X.shape[1]
+    M = rng.normal(scale=0.05, size=(dim, dim))
+    wave = 0.05 * np.sin(0.7 * X[:, :1] + 0.3 * X[:, 1:2])
+    return (X @ M + wave).ravel()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_compiled_elements_equal_the_numpy_reference_to_rounding(dim):
+    """Internal force, tangent and Prony history after two viscous steps, both layers (PU
+    inner, silicone outer: both materials' Prony series)."""
+    design = parse_design("pocket2-pu-sil")
+    mesh = build_mesh(design.geometry(), IndentationSettings().mesh_spec, dim=dim)
+    mats = [material(design.inner), material(design.outer)]
+    ref = Assembler(mesh, mats, threads=1, engine="numpy")
+    new = Assembler(mesh, mats, threads=2, engine="compiled")
+    u1 = _smooth_field(mesh.X, 0)
+    free = np.flatnonzero(~np.isin(np.arange(mesh.n_dofs), mesh.fixed))
+    s_ref, s_new = ref.initial_state(), new.initial_state()
+    for u, dt in ((u1, 0.1), (1.3 * u1, 0.05)):
+        f_ref, K_ref, s_ref = ref.evaluate(u, s_ref, dt)
+        f_new, K_new, s_new = new.evaluate(u, s_new, dt)
+        scale = np.abs(f_ref).max()
+        assert np.abs(f_new - f_ref).max() <= 1e-11 * scale
+    Kr, Kn = K_ref(free), K_new(free)
+    assert abs(Kn - Kr).max() <= 1e-11 * abs(Kr).max()
+    for a, b in zip(s_ref.groups, s_new.groups, strict=True):
+        assert np.abs(b.S0 - a.S0).max() <= 1e-11 * np.abs(a.S0).max()
+        assert np.abs(b.H - a.H).max() <= 1e-11 * np.abs(a.H).max()
+    ref.close()
+    new.close()
+
+
+def test_inverted_elements_are_refused_by_both_engines():
+    design = parse_design("solid-sil")
+    mesh = build_mesh(design.geometry(), IndentationSettings().mesh_spec, dim=2)
+    mats = [material(design.inner), material(design.outer)]
+    u = np.zeros_like(mesh.X)
+    u[:, 0] = -1.5 * mesh.X[:, 0]  # x -> -0.5 x: every element mirrored, det F < 0
+    u = u.ravel()
+    for engine in ("numpy", "compiled"):
+        asm = Assembler(mesh, mats, threads=1, engine=engine)
+        with pytest.raises(FloatingPointError, match="det F <= 0"):
+            asm.evaluate(u, asm.initial_state(), 0.1)
+
+
+@pytest.mark.parametrize("kind", ["distinct", "double", "triple", "tiny-gap"])
+def test_jacobi_eigenpairs_reconstruct_the_matrix(kind):
+    rng = np.random.default_rng(1)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    lam = {"distinct": [0.7, 1.0, 1.9], "double": [1.2, 1.2, 0.8], "triple": [1.1, 1.1, 1.1],
+           "tiny-gap": [1.0, 1.0 + 1e-9, 1.3]}[kind]
+    A = Q @ np.diag(lam) @ Q.T
+    A = 0.5 * (A + A.T)
+    w, V = np.empty(3), np.empty((3, 3))
+    sym_eig3(A, w, V)
+    assert np.allclose(V.T @ V, np.eye(3), atol=1e-14)
+    assert np.allclose(V @ np.diag(w) @ V.T, A, atol=1e-14)
+    assert np.allclose(np.sort(w), np.sort(lam), rtol=1e-13)
+
+
+def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite():
+    rng = np.random.default_rng(2)
+    n = 60
+    B = sp.random(n, n, density=0.08, random_state=3, format="csr")
+    K = (B @ B.T + sp.identity(n) * 0.5).tocsr()
+    rows, cols = K.nonzero()
+    G = sp.csr_matrix((rng.normal(size=8), (np.arange(4).repeat(2), rng.integers(0, n, 8))),
+                      shape=(4, n))
+    free = np.arange(n)
+    system = TangentSystem(rows, cols, free, n, [G])
+    data = np.asarray(K[rows, cols]).ravel()
+    kw = np.array([2.0, 0.0, 3.0, 0.0])
+    vals = system.values(data, [(kw, G.data)])
+    b = rng.normal(size=n)
+    full = K + G.T @ sp.diags(kw) @ G
+    x = system.factorize(vals)(b)
+    assert np.allclose(x, spla.spsolve(full.tocsc(), b), rtol=1e-10, atol=1e-12)
+    assert system.stats == {"cholesky": 1, "superlu": 0}
+    # an indefinite tangent (a negative pivot) is solved by LU instead
+    shifted = K - sp.identity(n) * (0.5 + 2.0 * spla.eigsh(B @ B.T, 1, which="SA")[0][0] + 1.0)
+    data = np.asarray(shifted.tocsr()[rows, cols]).ravel()
+    x = system.factorize(system.values(data, [(np.zeros(4), G.data)]))(b)
+    assert np.allclose(shifted @ x, b, atol=1e-8)
+    assert system.stats["superlu"] == 1
+
+
+@pytest.mark.parametrize(("design", "indenter"), [("pocket2-sil", "plate"),
+                                                  ("pocket1-pu-sil", "plate"),
+                                                  ("solid-sil", "cylinder:9@0")])
+def test_compiled_curves_equal_the_reference_within_the_newton_tolerance(design, indenter):
+    """Whole 2D runs, ramp and hold: the same steps, iterations and forces."""
+    runs = {e: indent(design, IndentationSettings(mode="2d", hold_s=2.0, indenter=indenter,
+                                                  engine=e, threads=1))
+            for e in ("numpy", "compiled")}
+    ref, new = runs["numpy"], runs["compiled"]
+    assert new.time_s.shape == ref.time_s.shape
+    tol = IndentationSettings().tol_N + IndentationSettings().tol_rel * np.abs(ref.force_N)
+    assert np.all(np.abs(new.force_N - ref.force_N) <= tol)
+    assert np.allclose(new.displacement_mm, ref.displacement_mm, rtol=0, atol=1e-9)
+
+
+def test_the_engine_is_checked_and_not_a_curve_setting():
+    from softhand.fem.sweep import _settings_of
+
+    with pytest.raises(ValueError, match="engine = 'fast'"):
+        IndentationSettings(engine="fast")
+    assert "engine" not in _settings_of(IndentationSettings(engine="numpy"))
