@@ -98,7 +98,7 @@ def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite():
     full = K + G.T @ sp.diags(kw) @ G
     x = system.factorize(vals)(b)
     assert np.allclose(x, spla.spsolve(full.tocsc(), b), rtol=1e-10, atol=1e-12)
-    assert system.stats == {"cholesky": 1, "superlu": 0}
+    assert system.stats == {"cholesky": 1, "superlu": 0, "analyses": 2}
     # an indefinite tangent (a negative pivot) is solved by LU instead
     shifted = K - sp.identity(n) * (0.5 + 2.0 * spla.eigsh(B @ B.T, 1, which="SA")[0][0] + 1.0)
     data = np.asarray(shifted.tocsr()[rows, cols]).ravel()

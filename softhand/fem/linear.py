@@ -61,11 +61,18 @@ def _point_pairs(G: sp.csr_matrix, fmap: np.ndarray):
 
 
 class TangentSystem:
-    """The lower triangle of the free-free tangent in a pattern fixed for the run.
+    """The lower triangle of the free-free tangent in a pattern fixed while the contact stays.
+
+    The pattern holds the elements' couplings and those of the contact points it was analysed
+    for. A contact set whose couplings all lie inside the elements' pattern (a plate or a
+    round indenter on the outer faces) costs no fill and is in from the start; one that couples
+    far dofs (the pocket: roof to floor) adds a point only once it closes, and the symbolic
+    analysis is redone then (a few times a run: the pocket's couplings add a third to the
+    factor when all are in, so a run does not pay for them before the pocket closes).
 
     Args:
         rows, cols: the elements' full pattern (one entry per stored value of the assembler's
-            tangent data, :meth:`softhand.fem.assembly.Assembler.tangent_data`).
+            tangent data, ``tangent_of(raw=True)`` of :meth:`Assembler.evaluate`).
         free: the free dofs, sorted.
         n_dofs: all dofs.
         contacts: one template gap matrix per contact set (CSR, points x dofs); each later
@@ -77,7 +84,7 @@ class TangentSystem:
                  contacts: list[sp.csr_matrix]) -> None:
         from cvxopt import cholmod, matrix, spmatrix
 
-        self._cholmod, self._matrix = cholmod, matrix
+        self._cholmod, self._matrix, self._spmatrix = cholmod, matrix, spmatrix
         fmap = np.full(n_dofs, -1, dtype=np.int64)
         fmap[free] = np.arange(free.size)
         n = free.size
@@ -85,48 +92,72 @@ class TangentSystem:
         r, c = fmap[rows], fmap[cols]
         keep = (r >= 0) & (c >= 0) & (r >= c)
         self._src = np.flatnonzero(keep)
-        er, ec = r[keep], c[keep]
+        self._element_keys = c[keep] * n + r[keep]  # column-major: CSC order of the lower part
         self._contacts = [_point_pairs(G, fmap) for G in contacts]
         self._contact_nnz = [G.nnz for G in contacts]
-        all_r = np.concatenate([er] + [p[3] for p in self._contacts])
-        all_c = np.concatenate([ec] + [p[4] for p in self._contacts])
-        keys = all_c * n + all_r  # column-major: CSC order of the lower triangle
+        self._pair_keys = [p[4] * n + p[3] for p in self._contacts]
+        elements = np.unique(self._element_keys)
+        #: per contact set, the points the pattern holds
+        self._active = [np.full(G.shape[0], bool(np.isin(k, elements).all()))
+                        for G, k in zip(contacts, self._pair_keys, strict=True)]
+        self.stats = {"cholesky": 0, "superlu": 0, "analyses": 0}
+        cholmod.options["supernodal"] = 2
+        self._analyse()
+
+    def _analyse(self) -> None:
+        """The pattern of the elements and the active contact points, and its symbolic
+        Cholesky factorization."""
+        n = self.n
+        chosen = [active[p[0]] for active, p in zip(self._active, self._contacts, strict=True)]
+        keys = np.concatenate([self._element_keys]
+                              + [k[sel] for k, sel in zip(self._pair_keys, chosen, strict=True)])
         ukeys, inv = np.unique(keys, return_inverse=True)
         self.nnz = ukeys.size
-        self._dst = inv[:er.size]
+        self._dst = inv[:self._element_keys.size]
         self._contact_dst = []
-        start = er.size
-        for p in self._contacts:
-            self._contact_dst.append(inv[start:start + p[0].size])
-            start += p[0].size
+        start = self._element_keys.size
+        for sel in chosen:
+            dst = np.full(sel.size, -1, dtype=np.int64)
+            dst[sel] = inv[start:start + int(sel.sum())]
+            self._contact_dst.append(dst)
+            start += int(sel.sum())
         self._rows = (ukeys % n).astype(np.int64)
         self._cols = (ukeys // n).astype(np.int64)
         self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
         probe = np.arange(self.nnz, dtype=float) + 1.0
-        A = spmatrix(matrix(probe), matrix(self._rows), matrix(self._cols), (n, n))
+        matrix = self._matrix
+        A = self._spmatrix(matrix(probe), matrix(self._rows), matrix(self._cols), (n, n))
         if not np.array_equal(np.asarray(A.V).ravel(), probe):  # CVXOPT keeps CSC order
             raise RuntimeError("CHOLMOD matrix does not keep the pattern's order")
         self._A = A
-        cholmod.options["supernodal"] = 2
-        self._symbolic = cholmod.symbolic(A, uplo="L")
-        self.stats = {"cholesky": 0, "superlu": 0}
+        self._symbolic = self._cholmod.symbolic(A, uplo="L")
+        self.stats["analyses"] += 1
 
     def values(self, element_data: np.ndarray,
                contacts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
         """The lower triangle's values: the elements' tangent data plus, per contact set,
         ``(kw, G_data)``: each point's penalty stiffness ``eps * w * [g < 0]`` and its gap
-        matrix's values (in the template's structure)."""
+        matrix's values (in the template's structure). A closed point the pattern does not
+        hold yet is added to it first (a new symbolic analysis)."""
+        closed = [np.flatnonzero(kw) for kw, _ in contacts]
+        new = False
+        for active, idx in zip(self._active, closed, strict=True):
+            if not active[idx].all():
+                active[idx] = True
+                new = True
+        if new:
+            self._analyse()
         vals = np.zeros(self.nnz)
         vals[self._dst] = element_data[self._src]
-        for (pt, ia, ib, _, _, ptr), dst, nnz, (kw, gdata) in zip(
-                self._contacts, self._contact_dst, self._contact_nnz, contacts, strict=True):
+        for (pt, ia, ib, _, _, ptr), dst, nnz, (kw, gdata), idx in zip(
+                self._contacts, self._contact_dst, self._contact_nnz, contacts, closed,
+                strict=True):
             if gdata.size != nnz:
                 raise ValueError(f"a gap matrix has {gdata.size} entries, its template {nnz}")
-            closed = np.flatnonzero(kw)
-            if closed.size == 0:
+            if idx.size == 0:
                 continue
-            counts = ptr[closed + 1] - ptr[closed]
-            sel = np.repeat(ptr[closed] - np.cumsum(np.r_[0, counts[:-1]]), counts) \
+            counts = ptr[idx + 1] - ptr[idx]
+            sel = np.repeat(ptr[idx] - np.cumsum(np.r_[0, counts[:-1]]), counts) \
                 + np.arange(counts.sum())
             vals += np.bincount(dst[sel], weights=kw[pt[sel]] * gdata[ia[sel]] * gdata[ib[sel]],
                                 minlength=self.nnz)
