@@ -27,8 +27,9 @@ from softhand.skin.representations import StockContact, get_representation
 from softhand.skin.soft_contact import SoftContactParams
 from softhand.warn import warn_at_caller
 
-__all__ = ["RangeIssue", "RigSettings", "SkinRangeWarning", "build_rig", "pair_law_values",
-           "run_rig", "warn_range_issues"]
+__all__ = ["CHECKED_FORCE_N", "ContactStability", "RangeIssue", "RigSettings", "SkinRangeWarning",
+           "build_rig", "contact_stable_timestep", "pair_law_values", "pair_mobility", "run_rig",
+           "warn_range_issues"]
 
 SKIN_HALF_AXES_M = (0.005, 0.008, 0.0125)  # phalanx: 10 mm long, 16 mm wide; 25 mm tall so
 # that a plate 8.6 mm deep (human tissue at 20 N) is still far from its far side (a convex
@@ -136,6 +137,8 @@ class SkinRangeWarning(UserWarning):
 
 
 CHECKED_TIMESTEPS_S = (0.5e-3, 2e-3)  # the calibration is tested at 0.5, 1 and 2 ms
+#: the top of the range a skin's contact is checked for stability up to (the FE curves reach 20 N)
+CHECKED_FORCE_N = 20.0
 
 
 @dataclass(frozen=True)
@@ -143,12 +146,12 @@ class RangeIssue:
     """One way a pair law is used outside its calibration.
 
     Attributes:
-        kind: ``timestep`` (outside :data:`CHECKED_TIMESTEPS_S`) or ``stiffness`` (the skin's
-            stiffest point on the pair's effective mass oscillates faster than an explicit
-            constraint update follows: omega x timestep > 1).
+        kind: ``timestep`` (outside :data:`CHECKED_TIMESTEPS_S`) or ``stiffness`` (the contact,
+            integrated explicitly, is unstable at this timestep somewhere up to
+            :data:`CHECKED_FORCE_N`: :func:`contact_stable_timestep`).
         pair: the pair's name.
         severity: how far outside: the timestep over the nearest checked bound (or that bound over
-            the timestep, >= 1), or omega x timestep.
+            the timestep, >= 1), or the timestep over the largest stable one.
         message: the one-pair message, starting ``pair 'NAME': ``.
     """
 
@@ -189,6 +192,148 @@ def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactPa
     model.pair_solref[pid], model.pair_solimp[pid] = pair_law_values(model, pid, params)
 
 
+def pair_mobility(model: mujoco.MjModel, pair: int, data: mujoco.MjData | None = None
+                  ) -> float:
+    """How much more mobile the pair's bodies are, in their most mobile direction at a possible
+    contact point, than the inverse inertia MuJoCo's solver assumes for the pair's rows.
+
+    MuJoCo regularises a contact row with ``efc_diagA``, by default the two bodies'
+    ``body_invweight0``: the *direction-averaged* translational inverse inertia at the bodies'
+    centres of mass at ``qpos0`` (a third of the trace of ``J M^-1 J^T``). The row's true inverse
+    inertia ``A = J M^-1 J^T`` along the contact normal can be up to 3x that for a body free in one
+    direction only (a body on a slide joint: 1/m against 1/(3m)), and more at a point away from
+    the centre of mass (a fingertip on hinges). This returns ``kappa = (A_1 + A_2) / A_hat``, where
+    ``A_i`` is the largest eigenvalue of body i's translational ``J M^-1 J^T`` over its geom's
+    centre and the six points of the geom's bounding sphere on its local axes (the contact point
+    lies inside both geoms' spheres), at the model's ``qpos0`` (the sum bounds the relative
+    motion of two bodies on separate kinematic trees). 1.0 if neither body moves.
+    """
+    g1, g2 = int(model.pair_geom1[pair]), int(model.pair_geom2[pair])
+    b1, b2 = int(model.geom_bodyid[g1]), int(model.geom_bodyid[g2])
+    a_hat = float(model.body_invweight0[b1, 0] + model.body_invweight0[b2, 0])
+    if a_hat <= 0 or model.nv == 0:
+        return 1.0
+    if data is None:
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+    jac, minv_jt = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    total = 0.0
+    for g, body in ((g1, b1), (g2, b2)):
+        if model.body_invweight0[body, 0] <= 0:  # the world, a mocap or a welded body
+            continue
+        centre, axes = data.geom_xpos[g], data.geom_xmat[g].reshape(3, 3)
+        radius = float(model.geom_rbound[g])
+        points = [centre] + [centre + sign * radius * axes[:, i]
+                             for i in range(3) for sign in (-1, 1) if radius > 0]
+        largest = 0.0
+        for point in points:
+            mujoco.mj_jac(model, data, jac, None, point, body)
+            mujoco.mj_solveM(model, data, minv_jt, jac)
+            largest = max(largest, float(np.linalg.eigvalsh(jac @ minv_jt.T)[-1]))
+        total += largest
+    return total / a_hat
+
+
+@dataclass(frozen=True)
+class ContactStability:
+    """Where a calibrated contact is least stable under an explicit integrator, and the largest
+    timestep it is stable at (:func:`contact_stable_timestep`).
+
+    Attributes:
+        max_timestep_s: the largest stable timestep, s.
+        omega: the contact's angular frequency there, rad/s.
+        damping_rate: its damping rate there (gamma: the acceleration per unit velocity), 1/s.
+        depth_mm: the penetration where the bound is tightest, mm.
+        force_N: the law's force at that penetration, N.
+        top_N: the force the check went up to, N.
+        mobility: kappa of :func:`pair_mobility`.
+    """
+
+    max_timestep_s: float
+    omega: float
+    damping_rate: float
+    depth_mm: float
+    force_N: float
+    top_N: float
+    mobility: float
+
+
+def contact_stable_timestep(params: SoftContactParams, inv_inertia: float, *,
+                            mobility: float = 1.0, top_N: float = CHECKED_FORCE_N,
+                            n: int = 2000) -> ContactStability:
+    r"""The largest timestep at which a pair carrying ``params`` is stable up to ``top_N``.
+
+    MuJoCo solves one contact row so that its acceleration is
+    :math:`\ddot r = (1-\beta)\,a_0 + \beta\,a_{ref}`, with :math:`a_0` the unconstrained
+    acceleration, :math:`a_{ref} = -b\,\dot r - k\,d(r)\,r` (direct solref :math:`(-S, -B)`:
+    :math:`k = S/d_w^2`, :math:`b = B/d_w`; :math:`S = \hat S \hat A`, :math:`B = \hat B \hat A`)
+    and :math:`\beta = \kappa d / (\kappa d + 1 - d)`, where :math:`\kappa = A/\hat A` is the
+    row's true inverse inertia over the one the solver regularises with
+    (:func:`pair_mobility`; :math:`\beta = d` when they agree). Linearised about the static
+    equilibrium at penetration :math:`r` (where :math:`a_0` balances the contact), the row is an
+    oscillator of angular frequency and damping rate
+
+    .. math::
+
+        \omega^2 = \frac{\kappa k d}{\kappa d + 1 - d}
+                   \Big(d + d' r + \frac{d' r}{1 - d}\Big), \qquad
+        \gamma = \frac{\kappa d\,b}{\kappa d + 1 - d}
+
+    (:math:`d' = \mathrm{d}d/\mathrm{d}r`: the impedance sigmoid stiffens the contact where it
+    rises). :math:`a_{ref}` is evaluated at the step's start (the constraint force is implicit in
+    the acceleration only: ``implicitfast``, ``implicit`` and ``Euler`` differentiate passive and
+    actuator forces, never contacts), then the velocity and position are updated one after the
+    other (semi-implicit Euler). For that map the Jury criterion gives stability iff
+    :math:`(\omega h)^2 + 2 \gamma h < 4` (:math:`\omega h < 2` undamped), so
+
+    .. math:: h_{max} = \min_r \frac{\sqrt{\gamma^2 + 4\omega^2} - \gamma}{\omega^2}
+
+    over the penetrations up to ``top_N``. ``RK4`` is held to the same bound (its own is higher:
+    :math:`\omega h < 2\sqrt 2` undamped). Checked in the indentation rig (a free indenter on a
+    slide joint, :math:`\kappa = 3`, under a dead weight): pocket2-sil, pocket2-sil-pu on 20 g
+    and solid-pu on 2 g at 10 and 20 N hold still at 0.95 :math:`h_{max}` and oscillate
+    without bound at 1.05 :math:`h_{max}`.
+
+    Args:
+        params: the skin's soft contact.
+        inv_inertia: :math:`\hat A`, the compiler's inverse inertia of the pair, 1/kg, > 0.
+        mobility: :math:`\kappa`, >= 0 (1: the true inverse inertia is the compiler's).
+        top_N: the largest force the contact should carry, N, > 0.
+        n: penetrations sampled between 0 and the depth of ``top_N``.
+    """
+    from softhand.skin.soft_contact import impedance
+
+    if not (np.isfinite(inv_inertia) and inv_inertia > 0):
+        raise ValueError(f"inv_inertia = {inv_inertia!r}: expected a finite number > 0 (1/kg)")
+    if not (np.isfinite(mobility) and mobility >= 0):
+        raise ValueError(f"mobility = {mobility!r}: expected a finite number >= 0")
+    if not (np.isfinite(top_N) and top_N > 0):
+        raise ValueError(f"top_N = {top_N!r}: expected a finite number of newtons > 0")
+    r_top = params.solimp[2]
+    while float(params.force(r_top * 1e3)) < top_N:
+        r_top *= 2
+    lo, hi = 0.0, r_top
+    for _ in range(60):  # the law is monotone in r: bisect for the depth of top_N
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(params.force(mid * 1e3)) < top_N else (lo, mid)
+    r = np.linspace(hi / n, hi, n)
+    d = impedance(r, params.solimp)
+    d_r = np.gradient(d, r)
+    dw = params.solimp[1]
+    k = params.stiffness * inv_inertia / dw**2
+    b = params.damping * inv_inertia / dw
+    share = mobility * d / (mobility * d + 1 - d)  # beta
+    omega2 = share * k * (d + d_r * r + d_r * r / (1 - d))
+    gamma = share * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = np.where(omega2 > 0, (np.sqrt(gamma**2 + 4 * omega2) - gamma) / omega2, np.inf)
+    h = np.where((omega2 <= 0) & (gamma > 0), 2 / np.maximum(gamma, 1e-300), h)
+    i = int(np.argmin(h))
+    return ContactStability(float(h[i]), float(np.sqrt(max(omega2[i], 0.0))), float(gamma[i]),
+                            float(r[i] * 1e3), float(params.force(r[i] * 1e3)), float(top_N),
+                            float(mobility))
+
+
 def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactParams, *,
                     issues: list[RangeIssue] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pair's ``solref`` and ``solimp`` for ``params``, scaled by its inverse inertia.
@@ -197,11 +342,12 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
     or into the spec it was compiled from (the inverse inertia does not depend on them).
 
     The pair is outside its calibrated range (a :class:`RangeIssue`) when the timestep is outside
-    the checked range, or when the skin's stiffest point on the pair's effective mass oscillates
-    faster than an explicit constraint update can follow (omega * timestep > 1; ``discrete``
-    integrates it implicitly). With ``issues`` None this warns at once
-    (:func:`warn_range_issues`); a caller that sets many pairs passes a list, which collects the
-    issues, and warns once for all of them (:func:`warn_range_issues`).
+    the checked range, or when the contact is unstable at the model's timestep somewhere up to
+    :data:`CHECKED_FORCE_N` (:func:`contact_stable_timestep`, with the pair's
+    :func:`pair_mobility` at ``qpos0``; ``discrete`` integrates it implicitly and is not
+    checked). With ``issues`` None this warns at once (:func:`warn_range_issues`); a caller that
+    sets many pairs passes a list, which collects the issues, and warns once for all of them
+    (:func:`warn_range_issues`).
     """
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     if pid < 0:
@@ -216,15 +362,18 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
         found.append(RangeIssue("timestep", name, max(h / hi, lo / h),
                                 f"pair {name!r}: timestep {h * 1e3:g} ms is outside the calibrated "
                                 f"range {lo * 1e3:g}-{hi * 1e3:g} ms"))
-    omega = float(np.sqrt(params.end_stiffness * inv))
-    explicit = model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE
-    if explicit and omega * h > 1.0:
-        found.append(RangeIssue(
-            "stiffness", name, omega * h,
-            f"pair {name!r}: skin stiffness {params.end_stiffness:.3g} N/m on effective "
-            f"mass {1 / inv:.3g} kg oscillates at {omega:.3g} rad/s; omega * timestep = "
-            f"{omega * h:.2f} > 1 is outside the calibrated range (unstable): use a "
-            f"timestep below {1e3 / omega:.3g} ms or a heavier body"))
+    if model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE:
+        st = contact_stable_timestep(params, inv, mobility=pair_mobility(model, pid))
+        if h > st.max_timestep_s:
+            found.append(RangeIssue(
+                "stiffness", name, h / st.max_timestep_s,
+                f"pair {name!r}: unstable at timestep {h * 1e3:g} ms: at {st.depth_mm:.2f} mm "
+                f"({st.force_N:.3g} N) the contact (the compiler's effective mass {1 / inv:.3g} kg, "
+                f"{st.mobility:.2g}x as mobile in its most mobile direction) oscillates at "
+                f"{st.omega:.3g} rad/s (damping rate {st.damping_rate:.3g} 1/s), and an explicit "
+                f"update is stable only while (omega h)^2 + 2 gamma h < 4: up to "
+                f"{st.max_timestep_s * 1e3:.3g} ms for forces up to {st.top_N:g} N; use a "
+                "smaller timestep or a heavier body"))
     if issues is None:
         warn_range_issues(found)
     else:
