@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import statistics
 import subprocess
 import sys
 import time
@@ -165,7 +166,7 @@ def _engines(repeats: int) -> dict[str, Any]:
         ref, new = last["numpy"], last["compiled"]
         same_points = ref.force_N.shape == new.force_N.shape
         out[label] = {
-            engine: {"wall_s": sorted(w)[len(w) // 2], "walls_s": w,
+            engine: {"wall_s": statistics.median(w), "walls_s": w,
                      "newton_iterations": int(sum(x["iterations"] for x in last[engine].log)),
                      "steps": len(last[engine].log),
                      "d2N_mm": last[engine].displacement_at(2.0)}
