@@ -26,7 +26,6 @@ shake moves both hands together and is left out, "a scene models only what it ne
 
 from __future__ import annotations
 
-from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -37,9 +36,23 @@ from softhand.hands.grasp import Grasp
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.paper import paper
 
-__all__ = ["CLOSE_S", "GRIP_FORCE_N", "GRIP_PHALANGES", "MAX_EFFORT_RAD", "MAX_SQUEEZE",
-           "PARTNER_SD_RANGE", "PHASES", "PartnerScript", "RelaxedHand", "Timeline",
-           "check_partner_size", "check_reset_options", "partner_postures", "partner_size_range"]
+__all__ = [
+    "CLOSE_S",
+    "GRIP_FORCE_N",
+    "GRIP_PHALANGES",
+    "MAX_EFFORT_RAD",
+    "MAX_SQUEEZE",
+    "PARTNER_SD_RANGE",
+    "PHASES",
+    "PartnerScript",
+    "RelaxedHand",
+    "Timeline",
+    "check_partner_size",
+    "check_reset_options",
+    "partner_postures",
+    "partner_size_range",
+    "phase_index",
+]
 
 PHASES = ("reach", "grip", "shake", "release", "return", "done")
 GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N (per data-glove sensor)
@@ -78,16 +91,25 @@ class Timeline:
         return self.ends[-1]
 
     def phase(self, t: float) -> str:
-        return PHASES[min(bisect_right(self.ends, t), len(PHASES) - 1)]
+        return PHASES[int(phase_index(np.array([self.ends]), np.array([t], float))[0])]
 
     def scaled(self, factor: float) -> Timeline:
         return Timeline(*(factor * v for v in (self.reach_s, self.grip_s, self.shake_s,
                                                 self.release_s, self.return_s)))
 
 
-def _min_jerk(s: float) -> float:
-    s = min(max(s, 0.0), 1.0)
-    return s**3 * (10 - 15 * s + 6 * s * s)
+def _min_jerk(s):
+    """Minimum-jerk blend 0 -> 1 of s in [0, 1] (clipped), for a number or an array."""
+    s = np.clip(s, 0.0, 1.0)
+    # float_power is C's pow, as Python's s**3 on a float: numpy's s**3 differs in the last bit
+    # for about 5 % of arrays' entries, and a handshake amplifies that to 1e-9 N
+    return np.float_power(s, 3) * (10 - 15 * s + 6 * s * s)
+
+
+def phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Index in PHASES of each world's phase at its time: ``ends`` (W, 5) the end of each phase
+    but ``done`` (Timeline.ends per world), ``t`` (W,) (s)."""
+    return np.minimum((ends <= np.asarray(t, float)[:, None]).sum(axis=1), len(PHASES) - 1)
 
 
 #: Time from the end of the reach to the grasp posture (s): the digits close over the other hand
@@ -100,7 +122,9 @@ MAX_EFFORT_RAD = 1.0
 
 
 class PartnerScript:
-    """Mount pose and digit joint targets of the partner at time t, with a grip-force regulator.
+    """Mount pose and digit joint targets of the partner at time t, with a grip-force regulator,
+    for one world or for W worlds at once (arrays with a leading world axis: the vector env's
+    worlds; one world is W = 1, and the single env runs the same code).
 
     The partner reaches with an open hand (``open_q``), closes to its grasp posture (``grasp_q``,
     solved from the handshake's contacts, softhand.hands.grasp) in CLOSE_S, then adds a grip
@@ -108,7 +132,7 @@ class PartnerScript:
     sets so that the force its digits feel follows ``grip_force_N``; on release the effort goes
     and the hand opens.
 
-    Args:
+    Args (one world's plan; :meth:`stack` makes W worlds of W one-world scripts):
         timeline: phase durations.
         start_pos, contact_pos: mount positions (m); the orientation stays fixed.
         grip_force_N: target of the grip measure the env feeds grip(): the summed normal force
@@ -126,57 +150,123 @@ class PartnerScript:
                  q_max: np.ndarray) -> None:
         if not (np.isfinite(grip_force_N) and grip_force_N > 0):
             raise ValueError(f"grip_force_N = {grip_force_N!r} must be finite and > 0")
-        self.timeline = timeline
-        self.start = np.asarray(start_pos, float)
-        self.contact = np.asarray(contact_pos, float)
-        self.grip_force_N = float(grip_force_N)
-        self.shake_phase = float(shake_phase)
-        self.open, self.grasp = np.asarray(open_q, float), np.asarray(grasp_q, float)
-        self.effort_dir = np.asarray(effort_dir, float)
-        self.q_max = np.asarray(q_max, float)
-        #: the grip effort (rad), the regulator's state
-        self.effort = 0.0
-        self._integral = 0.0
-        self._release_from: np.ndarray | None = None
+        #: each world's timeline
+        self.timelines = [timeline]
+        self.ends = np.array([timeline.ends])  # (W, 5) end of each phase but done (s)
+        self.reach_s = np.array([timeline.reach_s])
+        self.return_s = np.array([timeline.return_s])
+        self.starts = np.asarray(start_pos, float)[None].copy()  # (W, 3)
+        self.contacts = np.asarray(contact_pos, float)[None].copy()
+        self.grip_forces_N = np.array([float(grip_force_N)])  # (W,)
+        self.shake_phases = np.array([float(shake_phase)])
+        self.open = np.asarray(open_q, float)[None].copy()  # (W, servos)
+        self.grasp = np.asarray(grasp_q, float)[None].copy()
+        self.effort_dir = np.asarray(effort_dir, float)[None].copy()
+        self.q_max = np.asarray(q_max, float)[None].copy()
+        #: the grip effort (rad) of each world, the regulator's state
+        self.efforts = np.zeros(1)
+        self._integral = np.zeros(1)
+        self._release_from = self.grasp.copy()  # the targets the release starts from
+        self._released = np.zeros(1, bool)  # whether _release_from was set by a grip
+
+    _ROWS = ("ends", "reach_s", "return_s", "starts", "contacts", "grip_forces_N", "shake_phases",
+             "open", "grasp", "effort_dir", "q_max", "efforts", "_integral", "_release_from",
+             "_released")
+
+    @classmethod
+    def stack(cls, scripts: list[PartnerScript]) -> PartnerScript:
+        """One script of the worlds of ``scripts`` (in order), their states included."""
+        out = cls.__new__(cls)
+        out.timelines = [tl for s in scripts for tl in s.timelines]
+        for name in cls._ROWS:
+            setattr(out, name, np.concatenate([getattr(s, name) for s in scripts]))
+        return out
+
+    def set_world(self, i: int, script: PartnerScript) -> None:
+        """Make world ``i`` the one world of ``script`` (a new episode's plan and state)."""
+        self.timelines[i] = script.timelines[0]
+        for name in self._ROWS:
+            getattr(self, name)[i] = getattr(script, name)[0]
+
+    # one world's view (W = 1), as the single env and its scenario read it
+    @property
+    def timeline(self) -> Timeline:
+        return self.timelines[0]
+
+    @property
+    def start(self) -> np.ndarray:
+        return self.starts[0]
+
+    @property
+    def contact(self) -> np.ndarray:
+        return self.contacts[0]
+
+    @property
+    def grip_force_N(self) -> float:  # noqa: N802 (the one-world name it always had)
+        return float(self.grip_forces_N[0])
+
+    @property
+    def shake_phase(self) -> float:
+        return float(self.shake_phases[0])
+
+    @property
+    def effort(self) -> float:
+        return float(self.efforts[0])
 
     def mount(self, t: float) -> np.ndarray:
-        tl = self.timeline
-        e = tl.ends
-        if t < e[0]:
-            return self.start + _min_jerk(t / tl.reach_s) * (self.contact - self.start)
-        if t < e[3]:
-            pos = self.contact.copy()
-            if e[1] <= t < e[2]:
-                ramp = min(1.0, (t - e[1]) / 0.1, (e[2] - t) / 0.1)  # 0.1 s fade in and out
-                pos[2] += ramp * SHAKE_AMPLITUDE_M * np.sin(2 * np.pi * SHAKE_HZ * (t - e[1])
-                                                              + self.shake_phase)
-            return pos
-        return self.contact + _min_jerk((t - e[3]) / tl.return_s) * (self.start - self.contact)
+        """One world's mount position (m) at ``t`` (s)."""
+        return self.mounts(np.array([t], float))[0]
 
     def grip(self, t: float, grip_force_N: float, dt: float) -> np.ndarray:
-        """Digit joint targets: open on the reach, close to the grasp, regulate, then open."""
-        tl = self.timeline
-        phase = tl.phase(t)
-        if phase == "reach":
-            return self.open.copy()
-        if phase in ("grip", "shake"):
-            s = _min_jerk((t - tl.ends[0]) / CLOSE_S)
-            error = float(np.clip((self.grip_force_N - grip_force_N) / self.grip_force_N, -1, 1))
+        """One world's digit joint targets (:meth:`grips`)."""
+        return self.grips(np.array([t], float), np.array([grip_force_N], float), dt)[0]
+
+    def mounts(self, t: np.ndarray) -> np.ndarray:
+        """Every world's mount position (m), shape (W, 3), at its time ``t`` (s, shape (W,))."""
+        e = self.ends
+        t = np.asarray(t, float)
+        reach = self.starts + _min_jerk(t / self.reach_s)[:, None] * (self.contacts - self.starts)
+        held = self.contacts.copy()
+        ramp = np.minimum(1.0, np.minimum((t - e[:, 1]) / 0.1, (e[:, 2] - t) / 0.1))  # 0.1 s fades
+        shaking = (e[:, 1] <= t) & (t < e[:, 2])
+        held[:, 2] += np.where(shaking, ramp * SHAKE_AMPLITUDE_M * np.sin(
+            2 * np.pi * SHAKE_HZ * (t - e[:, 1]) + self.shake_phases), 0.0)
+        back = self.contacts + (_min_jerk((t - e[:, 3]) / self.return_s)[:, None]
+                                * (self.starts - self.contacts))
+        return np.where((t < e[:, 0])[:, None], reach, np.where((t < e[:, 3])[:, None], held, back))
+
+    def grips(self, t: np.ndarray, grip_force_N: np.ndarray, dt: float) -> np.ndarray:
+        """Every world's digit joint targets (W, servos) at its time ``t`` (W,) from the summed
+        force its phalanges feel (``grip_force_N``, (W,)): open on the reach, close to the grasp,
+        regulate, then open."""
+        t = np.asarray(t, float)
+        phase = phase_index(self.ends, t)
+        holding = (phase == 1) | (phase == 2)
+        out = self.open.copy()  # the reach
+        if holding.any():
+            h = holding
+            s = _min_jerk((t[h] - self.ends[h, 0]) / CLOSE_S)[:, None]
+            target = self.grip_forces_N[h]
+            error = np.clip((target - grip_force_N[h]) / target, -1, 1)
             # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
             # proportional part adds half of it
-            self._integral = float(np.clip(self._integral + MAX_EFFORT_RAD * error * dt / 0.1,
-                                           0.0, MAX_EFFORT_RAD))
-            self.effort = float(np.clip(self._integral + 0.5 * MAX_EFFORT_RAD * error, 0.0,
-                                        MAX_EFFORT_RAD))
-            q = np.minimum(self.open + s * (self.grasp - self.open)
-                           + self.effort * self.effort_dir, self.q_max)
-            self._release_from = q
-            return q
-        # release and after: the effort goes and the hand opens in 0.2 s
-        self.effort = self._integral = 0.0
-        held = self.grasp if self._release_from is None else self._release_from
-        s = _min_jerk((t - tl.ends[2]) / 0.2)
-        return held + s * (self.open - held)
+            self._integral[h] = np.clip(self._integral[h] + MAX_EFFORT_RAD * error * dt / 0.1,
+                                        0.0, MAX_EFFORT_RAD)
+            self.efforts[h] = np.clip(self._integral[h] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
+                                      MAX_EFFORT_RAD)
+            q = np.minimum(self.open[h] + s * (self.grasp[h] - self.open[h])
+                           + self.efforts[h, None] * self.effort_dir[h], self.q_max[h])
+            self._release_from[h] = q
+            self._released[h] = True
+            out[h] = q
+        released = phase >= 3
+        if released.any():  # the effort goes and the hand opens in 0.2 s
+            r = released
+            self.efforts[r] = self._integral[r] = 0.0
+            held = np.where(self._released[r, None], self._release_from[r], self.grasp[r])
+            s = _min_jerk((t[r] - self.ends[r, 2]) / 0.2)[:, None]
+            out[r] = held + s * (self.open[r] - held)
+        return out
 
 
 #: How far inside its range the open hand holds a joint whose range starts at 0 (PIP, thumb MCP):
@@ -295,7 +385,7 @@ class RelaxedHand:
     drives of a ``relaxed-human`` hand. Open on the reach with the thumb rotated to the grasp,
     closing to the grasp posture (``grasp_q``, solved from the handshake's contacts) in CLOSE_S
     once the partner arrives, holding it through the shake, opening in 0.2 s from the release; the
-    thumb keeps its rotation.
+    thumb keeps its rotation. One world, or W worlds at once (:meth:`stack`, :meth:`targets_at`).
 
     Args:
         timeline: the episode's phases.
@@ -304,16 +394,32 @@ class RelaxedHand:
     """
 
     def __init__(self, timeline: Timeline, grasp_q: np.ndarray, rotation: int) -> None:
-        self.timeline = timeline
-        self.grasp = np.asarray(grasp_q, float)
+        self.ends = np.array([timeline.ends])  # (W, 5)
+        self.grasp = np.asarray(grasp_q, float)[None].copy()  # (W, drives)
         self.open = np.zeros_like(self.grasp)
-        self.open[rotation] = self.grasp[rotation]
+        self.open[:, rotation] = self.grasp[:, rotation]
+
+    @classmethod
+    def stack(cls, hands: list[RelaxedHand]) -> RelaxedHand:
+        out = cls.__new__(cls)
+        for name in ("ends", "grasp", "open"):
+            setattr(out, name, np.concatenate([getattr(h, name) for h in hands]))
+        return out
+
+    def set_world(self, i: int, hand: RelaxedHand) -> None:
+        for name in ("ends", "grasp", "open"):
+            getattr(self, name)[i] = getattr(hand, name)[0]
 
     def targets(self, t: float) -> np.ndarray:
-        tl = self.timeline
-        phase = tl.phase(t)
-        if phase == "reach":
-            return self.open.copy()
-        if phase in ("grip", "shake"):
-            return self.open + _min_jerk((t - tl.ends[0]) / CLOSE_S) * (self.grasp - self.open)
-        return self.grasp + _min_jerk((t - tl.ends[2]) / 0.2) * (self.open - self.grasp)
+        """One world's targets at ``t`` (s)."""
+        return self.targets_at(np.array([t], float))[0]
+
+    def targets_at(self, t: np.ndarray) -> np.ndarray:
+        """Every world's targets (W, drives) at its time ``t`` (W,)."""
+        t = np.asarray(t, float)
+        phase = phase_index(self.ends, t)[:, None]
+        closing = self.open + _min_jerk((t - self.ends[:, 0]) / CLOSE_S)[:, None] * (
+            self.grasp - self.open)
+        opening = self.grasp + _min_jerk((t - self.ends[:, 2]) / 0.2)[:, None] * (
+            self.open - self.grasp)
+        return np.where(phase == 0, self.open, np.where(phase <= 2, closing, opening))

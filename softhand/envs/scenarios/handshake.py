@@ -28,6 +28,7 @@ from softhand.envs.partner import (
     RelaxedHand,
     Timeline,
     partner_postures,
+    phase_index,
 )
 from softhand.envs.scenario import Scenario
 from softhand.hands import partner_contact_pose, partner_start_pose, solve_grasp
@@ -37,7 +38,8 @@ from softhand.validate import check_number, show
 if TYPE_CHECKING:
     from softhand.envs.touch import TwoHandTouchEnv
 
-__all__ = ["CONTACT_N", "DEFAULT_REWARD_WEIGHTS", "HandshakeScenario"]
+__all__ = ["CONTACT_N", "DEFAULT_REWARD_WEIGHTS", "HandshakeScenario", "HandshakeWorlds",
+           "handshake_reward"]
 
 DEFAULT_REWARD_WEIGHTS = {"grip": 1.0, "contact": 0.5, "overload": 0.1, "effort": 0.01}
 CONTACT_N = 0.05  # a region counts as touched above this force
@@ -86,7 +88,6 @@ class HandshakeScenario(Scenario):
         self.timeline = Timeline()
         #: the episode's partner script (None before the first reset)
         self.script: PartnerScript | None = None
-        self._grip_measured = 0.0
 
     def prepare(self, env: TwoHandTouchEnv) -> tuple[tuple[int, int, float], ...]:
         """Solve the grasp of the env's two hands; the sensored hand's thumb is pre-rotated to
@@ -121,7 +122,8 @@ class HandshakeScenario(Scenario):
                                     **partner_postures(self.grasp, *self._range.T))
         self._relaxed = RelaxedHand(self.script.timeline, self.grasp.prosthetic_q,
                                     PROSTHETIC_MOTOR_JOINTS.index("thumb_rot"))
-        self._grip_measured = 0.0
+        #: the episode's per-step computations (one world of HandshakeWorlds)
+        self.world = HandshakeWorlds([self], share=True)
         return start, quat
 
     @property
@@ -132,32 +134,98 @@ class HandshakeScenario(Scenario):
         return self.script.mount(t)
 
     def partner_targets(self, t: float, feel_N: np.ndarray, dt: float) -> np.ndarray:
-        self._grip_measured = float(feel_N.sum())  # what the partner's digits press
-        return self.script.grip(t, self._grip_measured, dt)
+        return self.world.partner_targets(np.array([t], float), np.asarray(feel_N)[None], dt)[0]
 
     def sensored_targets(self, t: float) -> np.ndarray:
-        return self._relaxed.targets(t)
+        return self.world.sensored_targets(np.array([t], float))[0]
 
     def phase(self, t: float) -> str:
-        return (self.script.timeline if self.script else self.timeline).phase(t)
+        if self.script is None:
+            return self.timeline.phase(t)
+        return self.phases[int(self.world.phase_index(np.array([t], float))[0])]
 
     def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,
                      phase: str) -> dict[str, float]:
-        w, f = self.weights, forces_N
-        over = f[f > self.overload_N] - self.overload_N
-        terms = {"grip": 0.0, "contact": 0.0,
-                 "overload": -w["overload"] * float(over @ over),
-                 "effort": -w["effort"] * float(action @ action)}
-        if phase in self.engaged:
-            target = self.script.grip_force_N / GRIP_PHALANGES  # per phalanx
-            touched = f[f > CONTACT_N]
-            mean = float(touched.mean()) if touched.size else 0.0
-            terms["grip"] = -w["grip"] * ((mean - target) / target) ** 2
-            terms["contact"] = w["contact"] * touched.size / f.size
-        return terms
+        terms = self.world.reward_terms(np.asarray(forces_N)[None], np.asarray(action)[None],
+                                        np.array([self.phases.index(phase)]))
+        return {k: float(v[0]) for k, v in terms.items()}
 
     def info(self) -> dict[str, Any]:
         return {"partner_grip_N": self.script.grip_force_N if self.script else None,
-                "partner_grip_measured_N": self._grip_measured,
+                "partner_grip_measured_N": float(self.world.grip_measured_N[0]) if self.script
+                else 0.0,
                 "partner_effort_rad": self.script.effort if self.script else 0.0,
                 "grasp_thumb_rotation_rad": self.thumb_rotation_rad}
+
+
+def handshake_reward(forces_N: np.ndarray, action: np.ndarray, engaged: np.ndarray,
+                     target_N: np.ndarray, weights: np.ndarray,
+                     overload_N: np.ndarray) -> dict[str, np.ndarray]:
+    """The reward's terms (module docstring) of W worlds: ``forces_N`` (W, regions), ``action``
+    (W, 6), ``engaged`` (W,) whether the hands hold each other, ``target_N`` (W,) the partner's
+    grip per phalanx, ``weights`` (W, 4) in DEFAULT_REWARD_WEIGHTS order, ``overload_N`` (W,).
+    Returns each term, shape (W,)."""
+    f = forces_N
+    w = {k: weights[:, i] for i, k in enumerate(DEFAULT_REWARD_WEIGHTS)}
+    over = np.maximum(f - overload_N[:, None], 0.0)
+    touched = f > CONTACT_N
+    count = touched.sum(axis=1)
+    mean = np.where(touched, f, 0.0).sum(axis=1) / np.maximum(count, 1)
+    grip = -w["grip"] * ((mean - target_N) / target_N) ** 2
+    contact = w["contact"] * count / f.shape[1]
+    return {"grip": np.where(engaged, grip, 0.0), "contact": np.where(engaged, contact, 0.0),
+            "overload": -w["overload"] * (over * over).sum(axis=1),
+            "effort": -w["effort"] * (action * action).sum(axis=1)}
+
+
+class HandshakeWorlds:
+    """The per-step part of the handshake for W worlds at once, over arrays with a leading world
+    axis: the partner's script and grip regulator, the relaxed sensored hand, the phases and the
+    reward. The vector env (softhand.envs.vector) steps its worlds with it; a single
+    :class:`HandshakeScenario` is one world of it (W = 1), so the logic exists once.
+
+    Args:
+        scenarios: planned scenarios (after their reset), one per world.
+        share: with one scenario, step its own script and relaxed hand (the single env) instead
+            of copies.
+    """
+
+    def __init__(self, scenarios: list[HandshakeScenario], share: bool = False) -> None:
+        if share and len(scenarios) == 1:
+            self.script, self.relaxed = scenarios[0].script, scenarios[0]._relaxed
+        else:
+            self.script = PartnerScript.stack([s.script for s in scenarios])
+            self.relaxed = RelaxedHand.stack([s._relaxed for s in scenarios])
+        self.weights = np.array([[s.weights[k] for k in DEFAULT_REWARD_WEIGHTS]
+                                 for s in scenarios])
+        self.overload_N = np.array([s.overload_N for s in scenarios], float)
+        #: what each world's partner digits pressed at its last action step (N)
+        self.grip_measured_N = np.zeros(len(scenarios))
+
+    def set_world(self, i: int, scenario: HandshakeScenario) -> None:
+        """World ``i`` starts ``scenario``'s planned episode."""
+        self.script.set_world(i, scenario.script)
+        self.relaxed.set_world(i, scenario._relaxed)
+        self.weights[i] = [scenario.weights[k] for k in DEFAULT_REWARD_WEIGHTS]
+        self.overload_N[i] = scenario.overload_N
+        self.grip_measured_N[i] = 0.0
+
+    def partner_targets(self, t: np.ndarray, feel_N: np.ndarray, dt: float) -> np.ndarray:
+        """The partner's digit targets (W, servos) from the net force on each of its phalanges
+        (``feel_N``, (W, phalanges))."""
+        self.grip_measured_N = feel_N.sum(axis=1)  # what the partner's digits press
+        return self.script.grips(t, self.grip_measured_N, dt)
+
+    def sensored_targets(self, t: np.ndarray) -> np.ndarray:
+        return self.relaxed.targets_at(t)
+
+    def phase_index(self, t: np.ndarray) -> np.ndarray:
+        """Each world's phase at its time ``t`` (W,), as an index into PHASES."""
+        return phase_index(self.script.ends, t)
+
+    def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,
+                     phase: np.ndarray) -> dict[str, np.ndarray]:
+        engaged = (phase == PHASES.index("grip")) | (phase == PHASES.index("shake"))
+        return handshake_reward(forces_N, action, engaged,
+                                self.script.grip_forces_N / GRIP_PHALANGES, self.weights,
+                                self.overload_N)
