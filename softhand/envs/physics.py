@@ -35,7 +35,8 @@ import numpy as np
 
 from softhand.hands.skeleton import SENSOR_SLOTS, contact_sensor_force
 
-__all__ = ["Divergence", "DivergenceError", "MujocoPhysics", "mujoco_warnings_kept"]
+__all__ = ["Divergence", "DivergenceError", "MujocoPhysics", "SensorLayout", "contacts_above",
+           "diagnose", "mujoco_warnings_kept"]
 
 _NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 _W = mujoco.mjtWarning
@@ -115,20 +116,8 @@ class MujocoPhysics:
         self.data = mujoco.MjData(model)
         self.frame_skip = int(frame_skip)
         m = model
-        adr = np.array([m.sensor_adr[m.sensor(s).id] for s in region_sensors])
-        # SENSOR_SLOTS slots of (found, force xyz in the contact frame); slot 0's found counts
-        # every match
-        self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
-        self._found_idx = adr
-        bones = [(i, m.sensor_adr[m.sensor(s).id]) for i, names in enumerate(bone_sensors or [])
-                 for s in names]
-        self._bone_region = np.array([i for i, _ in bones], int)
-        self._bone_idx = (np.array([a for _, a in bones], int)[:, None]
-                          + np.arange(4 * SENSOR_SLOTS)[None, :] if bones
-                          else np.zeros((0, 4 * SENSOR_SLOTS), int))
-        self._n_regions = len(region_sensors)
-        feel = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors])
-        self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
+        #: where the region, bone and feel sensors sit in sensordata
+        self.sensors = SensorLayout(m, region_sensors, feel_sensors, bone_sensors)
         self._mocap = m.body(mocap_body).mocapid[0]
         # views into MjData (its buffers never move): written or read every step
         self._row = self.data.mocap_pos[self._mocap]
@@ -198,68 +187,121 @@ class MujocoPhysics:
         return self.divergence
 
     def _divergence(self, t: float) -> Divergence:
-        """What went wrong at ``t`` (s): MuJoCo's warning, or the first non-finite entry."""
-        m, d = self.model, self.data
-        fired = np.flatnonzero(self._warnings)
-        if fired.size:
-            w = int(fired[0])
-            what, kind = _WARNINGS.get(w, (f"warning {w}", "count"))
-            i = int(d.warning.lastinfo[w])
-            where = ""
-            if kind == "dof" and 0 <= i < m.nv:
-                where = f" in dof {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.dof_jntid[i])})"
-            elif kind == "qpos" and 0 <= i < m.nq:
-                j = int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1)
-                where = f" in qpos {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})"
-            elif kind == "actuator" and 0 <= i < m.nu:
-                where = f" of actuator {_name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i)}"
-            elif kind == "count":
-                where = f" ({i})"
-            head = "MuJoCo reset the simulation after" if w in _RESETS else "MuJoCo warned of"
-            return Divergence(t, f"{head} {what} ({_NAMES.get(w, w)}){where}")
-        if d.time < t:
-            return Divergence(t, "MuJoCo reset the simulation (its time went back to "
-                                 f"{d.time:.3f} s)")
-        for name, values, size in (("qpos", d.qpos, m.nq), ("qvel", d.qvel, m.nv),
-                                   ("qacc", d.qacc, m.nv)):
-            bad = np.flatnonzero(~np.isfinite(values[:size]))
-            if bad.size:
-                i = int(bad[0])
-                j = (int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1) if name == "qpos"
-                     else int(m.dof_jntid[i]))
-                return Divergence(t, f"non-finite state: {name}[{i}] = {values[i]} (joint "
-                                     f"{_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})")
-        return Divergence(t, "non-finite state")
+        return diagnose(self.model, self.data, t)
 
     def region_forces(self) -> tuple[np.ndarray, np.ndarray]:
         """Per region: the force on its sensed skin and bone together (N), and the bone's part."""
-        skin = contact_sensor_force(self._sensordata[self._sensor_idx].reshape(-1, SENSOR_SLOTS, 4))
-        bone = np.zeros(self._n_regions)
-        if self._bone_idx.size:
-            np.add.at(bone, self._bone_region, contact_sensor_force(
-                self._sensordata[self._bone_idx].reshape(-1, SENSOR_SLOTS, 4)))
-        return skin + bone, bone
+        return self.sensors.region_forces(self._sensordata)
 
     def saturated_sensors(self) -> int:
-        return int((self._sensordata[self._found_idx] > SENSOR_SLOTS).sum())
+        return int(self.sensors.saturated(self._sensordata))
 
     def partner_feel(self) -> np.ndarray:
-        return np.linalg.norm(self._sensordata[self._feel_idx], axis=1)
+        return self.sensors.feel(self._sensordata)
 
     def contacts_above(self, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(geom pairs (k, 2), normal forces (k,), limits (k,)) of the contacts whose normal force
         exceeds ``limits[geom1, geom2]`` (a geom x geom table; inf where there is no limit)."""
-        d = self.data
-        if d.ncon == 0:
-            return np.zeros((0, 2), int), np.zeros(0), np.zeros(0)
-        con = d.contact
-        adr = con.efc_address
-        live = adr >= 0
-        geoms = con.geom[live]
-        force = d.efc_force[adr[live]]  # elliptic cones: a contact's first row is its normal
-        top = limits[geoms[:, 0], geoms[:, 1]]
-        over = force > top
-        return geoms[over], force[over], top[over]
+        return contacts_above(self.data, limits)
+
+
+def contacts_above(d: mujoco.MjData, limits: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(geom pairs (k, 2), normal forces (k,), limits (k,)) of the contacts of ``d`` whose normal
+    force exceeds ``limits[geom1, geom2]`` (a geom x geom table; inf where there is no limit)."""
+    if d.ncon == 0:
+        return np.zeros((0, 2), int), np.zeros(0), np.zeros(0)
+    con = d.contact
+    adr = con.efc_address
+    live = adr >= 0
+    geoms = con.geom[live]
+    force = d.efc_force[adr[live]]  # elliptic cones: a contact's first row is its normal
+    top = limits[geoms[:, 0], geoms[:, 1]]
+    over = force > top
+    return geoms[over], force[over], top[over]
+
+
+class SensorLayout:
+    """Where the regions' contact sensors, their bones' and the partner's feel sensors sit in
+    ``sensordata``; reads one world's sensordata (1-D) or many worlds' at once (rows).
+
+    Args: as :class:`MujocoPhysics`.
+    """
+
+    def __init__(self, m: mujoco.MjModel, region_sensors: list[str], feel_sensors: list[str],
+                 bone_sensors: list[tuple[str, ...]] | None = None) -> None:
+        adr = np.array([m.sensor_adr[m.sensor(s).id] for s in region_sensors])
+        # SENSOR_SLOTS slots of (found, force xyz in the contact frame); slot 0's found counts
+        # every match
+        self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
+        self._found_idx = adr
+        bones = [(i, m.sensor_adr[m.sensor(s).id]) for i, names in enumerate(bone_sensors or [])
+                 for s in names]
+        self._n_regions = len(region_sensors)
+        self._bone_region = np.array([i for i, _ in bones], int)
+        self._bone_idx = (np.array([a for _, a in bones], int)[:, None]
+                          + np.arange(4 * SENSOR_SLOTS)[None, :] if bones
+                          else np.zeros((0, 4 * SENSOR_SLOTS), int))
+        feel = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors])
+        self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
+
+    def region_forces(self, sensordata: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per region (last axis): the force on its sensed skin and bone together (N), and the
+        bone's part."""
+        lead = sensordata.shape[:-1]
+        skin = contact_sensor_force(
+            sensordata[..., self._sensor_idx].reshape(*lead, -1, SENSOR_SLOTS, 4))
+        bone = np.zeros((*lead, self._n_regions))
+        if self._bone_idx.size:
+            per_bone = contact_sensor_force(
+                sensordata[..., self._bone_idx].reshape(*lead, -1, SENSOR_SLOTS, 4))
+            for k, region in enumerate(self._bone_region):  # in order, as np.add.at adds
+                bone[..., region] += per_bone[..., k]
+        return skin + bone, bone
+
+    def saturated(self, sensordata: np.ndarray) -> np.ndarray:
+        """How many region sensors matched more contacts than they have slots."""
+        return (sensordata[..., self._found_idx] > SENSOR_SLOTS).sum(axis=-1)
+
+    def feel(self, sensordata: np.ndarray) -> np.ndarray:
+        """Net force (N) on each of the partner's phalanx tissues (last axis)."""
+        return np.linalg.norm(sensordata[..., self._feel_idx], axis=-1)
+
+
+def diagnose(m: mujoco.MjModel, d: mujoco.MjData, t: float) -> Divergence:
+    """Why a world diverged at ``t`` (s, its last good time), from its data after the step:
+    MuJoCo's warning (the first that fired), a reset (its time went back), or the first
+    non-finite entry of the state."""
+    fired = np.flatnonzero(d.warning.number)
+    if fired.size:
+        w = int(fired[0])
+        what, kind = _WARNINGS.get(w, (f"warning {w}", "count"))
+        i = int(d.warning.lastinfo[w])
+        where = ""
+        if kind == "dof" and 0 <= i < m.nv:
+            where = f" in dof {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.dof_jntid[i])})"
+        elif kind == "qpos" and 0 <= i < m.nq:
+            j = int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1)
+            where = f" in qpos {i} (joint {_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})"
+        elif kind == "actuator" and 0 <= i < m.nu:
+            where = f" of actuator {_name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i)}"
+        elif kind == "count":
+            where = f" ({i})"
+        head = "MuJoCo reset the simulation after" if w in _RESETS else "MuJoCo warned of"
+        return Divergence(t, f"{head} {what} ({_NAMES.get(w, w)}){where}")
+    if d.time < t:
+        return Divergence(t, "MuJoCo reset the simulation (its time went back to "
+                             f"{d.time:.3f} s)")
+    for name, values, size in (("qpos", d.qpos, m.nq), ("qvel", d.qvel, m.nv),
+                               ("qacc", d.qacc, m.nv)):
+        bad = np.flatnonzero(~np.isfinite(values[:size]))
+        if bad.size:
+            i = int(bad[0])
+            j = (int(np.searchsorted(m.jnt_qposadr, i, side="right") - 1) if name == "qpos"
+                 else int(m.dof_jntid[i]))
+            return Divergence(t, f"non-finite state: {name}[{i}] = {values[i]} (joint "
+                                 f"{_name(m, mujoco.mjtObj.mjOBJ_JOINT, j)})")
+    return Divergence(t, "non-finite state")
 
 
 def _name(model: mujoco.MjModel, kind: mujoco.mjtObj, i: int) -> str:
