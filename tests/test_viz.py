@@ -139,8 +139,40 @@ def test_contacts_designs_and_phase(summary):
     assert points["sim_time_points"] == N_FRAMES
     assert "Arrows3D:vectors" in summary["entities"]["world/contacts/normals"]["temporal"]
     text = summary["texts"]["skin/designs"]
-    assert "| Index1 |" in text and "pocket2-sil" in text and "rigid" in text
+    assert "| rigid | Back1, Back2 |" in text  # one row per design, naming its regions
+    assert "| pocket2-sil | Thumb1," in text and "prosthetic hand" in text
+    assert "partner's hand" in text
     assert summary["entities"]["partner/phase"]["sim_time_points"] == 4  # one per change
+
+
+def test_hands_are_labelled_and_series_have_distinct_colours(model, tmp_path):
+    """Which hand is which is written in the scene; no two regions share a plot colour; a
+    region that never carries load stays out of the plot and is named in the text."""
+    frames = synthetic_frames(model, 20)
+    forces = frames.region_force_N.copy()
+    forces[:, 0] = 0.0  # Thumb1 never touched
+    frames = dataclasses.replace(frames, region_force_N=forces)
+    path = record_handshake(tmp_path / "h.rrd", model, frames)
+    summary = read_recording_summary(path)
+    hands = summary["entities"]["world/hands"]
+    assert "Points3D:labels" in hands["static"] and "Points3D:positions" in hands["temporal"]
+    assert "never carry" in summary["texts"]["skin/designs"]
+    assert "Thumb1." in summary["texts"]["skin/designs"]
+    assert len(set(recording._SERIES_COLOURS)) == len(recording._SERIES_COLOURS) >= len(REGIONS)
+    assert recording._loaded(frames) == list(REGIONS[1:])
+
+
+def test_recording_opens_on_the_contact_phase(model):
+    """The time selection spans the frames carrying >= 5 % of the peak total force."""
+    frames = synthetic_frames(model, 50)
+    forces = np.zeros_like(frames.region_force_N)
+    forces[10:30, 3] = np.linspace(0.0, 4.0, 20)
+    frames = dataclasses.replace(frames, region_force_N=forces)
+    start, end, peak = recording._contact_window(frames)
+    assert peak == 29 and end == pytest.approx(frames.time_s[29])
+    assert start == pytest.approx(frames.time_s[11])  # 0.21 N >= 0.2 N, the first over 5 %
+    eye = recording._eye(model, frames, peak)
+    assert eye is not None
 
 
 def test_force_colors_stand_out_over_2n():

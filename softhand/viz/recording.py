@@ -10,22 +10,30 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 | ``world/bodies/{body}`` | Transform3D | per frame | world pose of a ``pro_*``/``hum_*`` body |
 | ``world/bodies/{body}/{geom}`` | a shape (1) | static | the geom in its body's frame, colour |
 | ``world/bodies/{body}/pro_skin_{region}`` | a shape (1) | colour per frame | see (2) |
+| ``world/hands`` | Points3D | per frame | one labelled point at each palm: which hand is which |
 | ``world/contacts/points`` | Points3D | per frame | contact points, sized and coloured by force |
 | ``world/contacts/normals`` | Arrows3D | per frame | contact normals, ARROW_M_PER_N m per N |
 | ``forces/{region}`` | Scalars | per frame | the region's normal force, N |
 | ``sensors/{region}`` | Scalars | per frame | its embedded sensor's reading, N on the patch (3) |
-| ``skin/designs`` | TextDocument | static | Markdown table: region, body, skin design |
+| ``skin/designs`` | TextDocument | static | Markdown: the hands, each skin design and its regions |
 | ``partner/phase`` | TextLog | at changes | partner phase (``reach``, ``grip``, ...) |
 
 (1) Capsules3D, Ellipsoids3D, Boxes3D, Cylinders3D or Mesh3D (the palm's convex skin and tissue
 pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom: shape and label
-``{region}: {design}`` static (meshes: no label), colour force_colors(force) per frame.
-``forces/{region}`` also holds a static SeriesLines (its name). (3) When the frames carry
+``{region}`` static (meshes: no label; the label shown only on regions that carry load),
+colour force_colors(force) per frame. ``forces/{region}`` also holds a static SeriesLines (its
+name with the unit, and a colour of its own: no two regions share one). (3) When the frames carry
 sensor readings; the series is named ``{region} ({placement})`` and its view stands beside the
 forces' view, so that a region's reading and its contact force are read side by side.
 Geom and body names are MuJoCo's (``{body}`` e.g. ``pro_index_proximal``, ``hum_base``); unnamed
 geoms are called ``geom{id}``. Body poses are world poses, so the body entities are flat (not nested
 along the kinematic tree).
+
+The default blueprint opens where the hands touch: the time panel selects the contact phase
+(the frames whose total force is at least 5 % of its peak) and plays it in a loop, the 3D view
+looks at the two palms at the peak from ``softhand render``'s default angle
+(:class:`softhand.viz.render.CameraView`), and the force plot lists only the regions that carry
+load (over ``LOADED_N``); the regions that never do are named in ``skin/designs``.
 """
 
 from __future__ import annotations
@@ -51,6 +59,7 @@ from softhand.laws.fit import REFERENCE_FORCE_N
 __all__ = [
     "ARROW_M_PER_N",
     "HAND_PREFIXES",
+    "LOADED_N",
     "STANDOUT_FORCE_N",
     "HandshakeFrames",
     "force_colors",
@@ -65,12 +74,24 @@ HAND_PREFIXES: tuple[str, ...] = ("pro_", "hum_")
 STANDOUT_FORCE_N = REFERENCE_FORCE_N
 #: Length of a contact-normal arrow per newton of normal force (m/N).
 ARROW_M_PER_N = 0.01
-#: Contact point radius (m) at 0 N and its increase at max_force_N.
-_POINT_RADIUS_M = (0.001, 0.003)
+#: Contact point radius (m) at 0 N and its increase at max_force_N (large enough to show through
+#: the skin surface they lie on).
+_POINT_RADIUS_M = (0.003, 0.004)
 #: Force colour ramps (RGB): 0 N -> STANDOUT_FORCE_N pale to blue; above it orange to red.
 _COOL = (np.array([215.0, 210.0, 200.0]), np.array([70.0, 110.0, 200.0]))
 _WARM = (np.array([255.0, 170.0, 0.0]), np.array([200.0, 0.0, 0.0]))
 _TIMELINE = "sim_time"
+#: A region whose force never exceeds this (N) is left out of the force plot and unlabelled.
+LOADED_N = 0.05
+#: 20 distinct series colours (matplotlib's tab20, dark and light alternating), one per region.
+_SERIES_COLOURS = (
+    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
+    (174, 199, 232), (255, 187, 120), (152, 223, 138), (255, 152, 150), (197, 176, 213),
+    (196, 156, 148), (247, 182, 210), (199, 199, 199), (219, 219, 141), (158, 218, 229))
+#: Hand names for the labels, by body-name prefix; the palm body that carries each label.
+_HANDS = {"pro_": ("prosthetic hand (softhand skin)", "pro_palm"),
+          "hum_": ("partner's hand (human tissue)", "hum_palm")}
 
 
 @dataclass(frozen=True)
@@ -271,20 +292,71 @@ def _body_poses(
     return pos, quat
 
 
-def _blueprint(sensors: bool = False) -> rrb.Blueprint:
-    series = rrb.TimeSeriesView(origin="forces", name="region forces (N)")
+def _contact_window(frames: HandshakeFrames) -> tuple[float, float, int]:
+    """(first, last) time of the contact phase and the frame of peak total force: the frames
+    whose total region force is at least 5 % of its peak (the whole run if none carries any)."""
+    total = frames.region_force_N.sum(axis=1)
+    peak = int(np.argmax(total))
+    on = np.flatnonzero(total >= 0.05 * total[peak]) if total[peak] > 0 else np.arange(total.size)
+    return float(frames.time_s[on[0]]), float(frames.time_s[on[-1]]), peak
+
+
+def _eye(model: mujoco.MjModel, frames: HandshakeFrames, frame: int) -> rrb.EyeControls3D:
+    """The 3D view's eye: ``softhand render``'s default angle and distance, looking at the
+    midpoint of the two palms at ``frame``."""
+    from softhand.viz.render import CameraView
+
+    palms = [model.body(name).id for _, name in _HANDS.values()]
+    data = mujoco.MjData(model)
+    data.qpos[:] = frames.qpos[frame]
+    data.mocap_pos[:] = frames.mocap_pos[frame]
+    data.mocap_quat[:] = frames.mocap_quat[frame]
+    mujoco.mj_kinematics(model, data)
+    target = data.xpos[palms].mean(axis=0)
+    view = CameraView()
+    az, el = math.radians(view.azimuth_deg), math.radians(view.elevation_deg)
+    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    return rrb.EyeControls3D(position=target - view.distance_m * forward, look_target=target,
+                             eye_up=(0.0, 0.0, 1.0))
+
+
+def _loaded(frames: HandshakeFrames) -> list[str]:
+    """The regions whose force exceeds LOADED_N at some frame."""
+    top = frames.region_force_N.max(axis=0)
+    return [r for k, r in enumerate(frames.region_names) if top[k] > LOADED_N]
+
+
+def _blueprint(model: mujoco.MjModel | None = None, frames: HandshakeFrames | None = None,
+               sensors: bool = False) -> rrb.Blueprint:
+    eye, panel, forces = None, None, "$origin/**"
+    if model is not None and frames is not None:
+        start, end, peak = _contact_window(frames)
+        eye = _eye(model, frames, peak)
+        window = rr.encodings.AbsoluteTimeRange(round(start * 1e9), round(end * 1e9))
+        panel = rrb.TimePanel(timeline=_TIMELINE, play_state="playing", loop_mode="selection",
+                              time_selection=window)
+        loaded = _loaded(frames)
+        forces = [f"$origin/{rr.escape_entity_path_part(r)}" for r in loaded] or "$origin/**"
+    series = rrb.TimeSeriesView(origin="forces", contents=forces,
+                                name="region forces (N), regions that carry load",
+                                plot_legend=rrb.PlotLegend(visible=True))
     if sensors:
         series = rrb.Horizontal(series, rrb.TimeSeriesView(
-            origin="sensors", name="embedded sensor readings (N on the patch)"))
+            origin="sensors", contents=forces,
+            name="embedded sensor readings (N on the 4 x 4 mm patch)"))
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial3DView(origin="world", name="handshake"),
+            rrb.Spatial3DView(origin="world", name="handshake (grey-blue < 2 N, orange-red > 2 N)",
+                              eye_controls=eye, background=(250, 250, 248)),
             rrb.Vertical(
                 series,
-                rrb.TextDocumentView(origin="skin", name="skin designs"),
+                rrb.TextDocumentView(origin="skin", name="hands and skins"),
                 rrb.TextLogView(origin="partner", name="partner phase"),
+                row_shares=[3, 2, 1],
             ),
+            column_shares=[3, 2],
         ),
+        *(() if panel is None else (panel,)),
         collapse_panels=True,
     )
 
@@ -299,6 +371,7 @@ def _log_recording(
     skin = {info[r].geom: r for r in frames.region_names}
     forces = {r: frames.region_force_N[:, k] for k, r in enumerate(frames.region_names)}
     log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    loaded = set(_loaded(frames))
 
     bodies = [b for b in range(model.nbody) if model.body(b).name.startswith(HAND_PREFIXES)]
     for g in range(model.ngeom):
@@ -317,7 +390,8 @@ def _log_recording(
             log(entity, archetype.from_fields(**fields), static=True)
             continue
         if archetype is not rr.Mesh3D:
-            fields["labels"] = [f"{region}: {frames.skin_designs[region]}"]
+            fields["labels"] = [region]
+            fields["show_labels"] = region in loaded
         log(entity, archetype.from_fields(**fields), static=True)
         colors = force_colors(forces[region], max_force_N=max_force_N)
         send(entity, time, archetype.columns(**{colour: colors}))
@@ -326,22 +400,46 @@ def _log_recording(
     for k, b in enumerate(bodies):
         entity = _path("world", "bodies", model.body(b).name)
         send(entity, time, rr.Transform3D.columns(translation=pos[:, k], quaternion=quat[:, k]))
+    names = [model.body(b).name for b in bodies]
+    palms = [names.index(palm) for _, palm in _HANDS.values() if palm in names]
+    if len(palms) == len(_HANDS):
+        labels = [label for label, _ in _HANDS.values()]
+        log("world/hands", rr.Points3D.from_fields(labels=labels, radii=[0.002, 0.002],
+                                                   show_labels=True,
+                                                   colors=[(240, 140, 50), (60, 120, 220)]),
+            static=True)
+        send("world/hands", time, rr.Points3D.columns(
+            positions=pos[:, palms].reshape(-1, 3)).partition(np.full(len(frames.time_s), 2)))
 
+    colour_of = {r: _SERIES_COLOURS[k % len(_SERIES_COLOURS)]
+                 for k, r in enumerate(frames.region_names)}
     for region, force in forces.items():
         entity = _path("forces", region)
-        log(entity, rr.SeriesLines(names=region), static=True)
+        log(entity, rr.SeriesLines(names=f"{region} (N)", colors=[colour_of[region]], widths=2.0),
+            static=True)
         send(entity, time, rr.Scalars.columns(scalars=force))
     if frames.sensor_reading_N is not None:
         for k, region in enumerate(frames.region_names):
             entity = _path("sensors", region)
             where = frames.sensor_placements.get(region, "")
-            log(entity, rr.SeriesLines(names=f"{region} ({where})" if where else region),
+            log(entity, rr.SeriesLines(names=f"{region} ({where}, N)" if where else
+                                       f"{region} (N)", colors=[colour_of[region]], widths=2.0),
                 static=True)
             send(entity, time, rr.Scalars.columns(scalars=frames.sensor_reading_N[:, k]))
 
-    table = ["| region | body | skin design |", "|---|---|---|"]
-    table += [f"| {r} | {info[r].body} | {frames.skin_designs[r]} |" for r in frames.region_names]
-    text = "# Skin design per region\n\n" + "\n".join(table) + "\n"
+    by_design: dict[str, list[str]] = {}
+    for r in frames.region_names:
+        by_design.setdefault(frames.skin_designs[r], []).append(r)
+    table = ["| skin design | regions |", "|---|---|"]
+    table += [f"| {d} | {', '.join(rs) if len(rs) < len(frames.region_names) else 'all'} |"
+              for d, rs in by_design.items()]
+    idle = [r for r in frames.region_names if r not in loaded]
+    text = ("# Hands and skins\n\n"
+            "- **prosthetic hand**: the softhand skin; its regions coloured by force, grey-blue "
+            "under 2 N, orange to red over 2 N (red at the colour scale's top)\n"
+            "- **partner's hand**: human tissue over bones\n\n" + "\n".join(table) + "\n\n"
+            + (f"Regions that never carry over {LOADED_N:g} N (left out of the plot): "
+               f"{', '.join(idle)}.\n" if idle else "Every region carries load.\n"))
     log("skin/designs", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
 
     lengths = np.array([len(c) for c in frames.contacts])
@@ -407,7 +505,8 @@ def record_handshake(
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        rec.save(tmp, default_blueprint=_blueprint(frames.sensor_reading_N is not None))
+        rec.save(tmp, default_blueprint=_blueprint(model, frames,
+                                                   frames.sensor_reading_N is not None))
         _log_recording(rec, model, frames, max_force_N)
         rec.flush()
         rec.disconnect()
