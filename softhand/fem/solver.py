@@ -275,6 +275,7 @@ class IndentationResult:
             "n_steps": len(self.log),
             "newton_iterations": int(sum(r["iterations"] for r in self.log)),
             "solver_version": SOLVER_VERSION,
+            "engine": s.engine,
             "time_s": self.time_s.tolist(),
             "displacement_mm": self.displacement_mm.tolist(),
             "force_N": self.force_N.tolist(),
