@@ -4,6 +4,7 @@
 - scenario: the seam a social touch implements; scenarios/: one module per touch (handshake);
 - handshake: ``HandshakeEnv``, the touch env with the handshake scenario;
 - partner: the partner's script and population bounds; population: partners like the paper's 30;
+- vector: ``HandshakeVectorEnv``, W handshakes stepped together (mujoco.batch, softhand.envs.batch);
 - physics, sensing, skins, models, controllers, run: the pieces the env and its runs use.
 
 Importing this package registers ``softhand/Handshake-v0``::
@@ -20,5 +21,8 @@ from softhand.envs.handshake import DEFAULT_REWARD_WEIGHTS, HandshakeEnv
 __all__ = ["DEFAULT_REWARD_WEIGHTS", "HandshakeEnv"]
 
 if "softhand/Handshake-v0" not in gym.registry:
+    # vector_entry_point: gymnasium.make_vec(..., vectorization_mode="vector_entry_point") makes
+    # the batched vector env (mujoco.batch), not N copies of the env
     gym.register(id="softhand/Handshake-v0", entry_point="softhand.envs.handshake:HandshakeEnv",
+                 vector_entry_point="softhand.envs.vector:HandshakeVectorEnv",
                  max_episode_steps=None)

@@ -155,9 +155,12 @@ class TwoHandTouchEnv(gym.Env):
                 if m.sensor(i).name.startswith("hum_feel_")
                 and m.sensor(i).name.rsplit("_", 1)[-1] in ("proximal", "middle", "distal")]
         #: the physics, behind the seam a batched backend would implement (envs.physics)
-        self.physics = MujocoPhysics(m, self.frame_skip,
-                                     [infos[r].sensor for r in self.region_names], feel,
-                                     "hum_base", [infos[r].bone_sensors for r in self.region_names])
+        #: what the physics reads (region, feel and bone sensors; the partner's mount), as
+        #: MujocoPhysics' arguments: a batched backend reads the same (softhand.envs.batch)
+        self.physics_reads = {"region_sensors": [infos[r].sensor for r in self.region_names],
+                              "feel_sensors": feel, "mocap_body": "hum_base",
+                              "bone_sensors": [infos[r].bone_sensors for r in self.region_names]}
+        self.physics = MujocoPhysics(m, self.frame_skip, **self.physics_reads)
         self.model, self.data = m, self.physics.data
         self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
@@ -274,7 +277,7 @@ class TwoHandTouchEnv(gym.Env):
             self._forces, self._bone = physics.region_forces()
             self._readings = self.sensors.step(self._forces)
             self._saturated = physics.saturated_sensors()
-            self._check_range()
+            self._check_range(*physics.contacts_above(self._range), physics.time)
         d = self.data
         now = diverged.time_s if unstable else d.time
         phase = scenario.phase(now)
@@ -319,16 +322,17 @@ class TwoHandTouchEnv(gym.Env):
         self._bone_steps = 0  # regions with bone bottoming out, summed over the steps
         self._worst: dict[str, tuple[float, float, float]] = {}  # pair -> (N, limit N, t s)
 
-    def _check_range(self) -> None:
-        """Count the contacts above their pair law's calibrated range at this step (``info``) and
-        into the episode's counts; the episode warns once, at its end (:meth:`_warn_range`)."""
-        geoms, force, top = self.physics.contacts_above(self._range)
+    def _check_range(self, geoms: np.ndarray, force: np.ndarray, top: np.ndarray,
+                     t: float) -> None:
+        """Count the contacts above their pair law's calibrated range at this step, at time ``t``
+        (s; ``geoms``, ``force``, ``top``: MujocoPhysics.contacts_above), for ``info`` and into
+        the episode's counts; the episode warns once, at its end (:meth:`_warn_range`). The
+        vector env (softhand.envs.vector) keeps each world's counts with this too."""
         self._beyond = int(force.size)
         self._beyond_N = {}
         self._episode_steps += 1
         self._beyond_steps += self._beyond
         self._bone_steps += int((self._bone > 0).sum())
-        t = self.physics.time
         for (g1, g2), f, lim in zip(geoms.tolist(), force.tolist(), top.tolist(), strict=True):
             name = self._pair_name[(min(g1, g2), max(g1, g2))]
             self._beyond_N[name] = max(f, self._beyond_N.get(name, 0.0))
