@@ -25,6 +25,7 @@ Error measures (all in the rig at timestep 1 ms unless told otherwise):
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -58,7 +59,7 @@ from softhand.skin.contact_classes import (
 from softhand.skin.pad import PadParams
 from softhand.skin.pair import PairLaw, fit_pair_law
 from softhand.skin.representations import REPRESENTATIONS, get_representation, loading_ramp
-from softhand.skin.rig import RigSettings, build_rig, run_rig
+from softhand.skin.rig import RigSettings, SkinRangeWarning, build_rig, run_rig
 from softhand.skin.soft_contact import SoftContactParams
 from softhand.validate import check_mapping, check_number, join, show
 
@@ -393,8 +394,14 @@ def _mass_sensitivity(representation: str, curve: Curve, settings: RigSettings,
     for factor in (1.0, *MASS_FACTORS):
         st = RigSettings(timestep=settings.timestep, mass_kg=settings.mass_kg * factor,
                          integrator=settings.integrator)
-        out = run_rig(build_rig(representation, params, settings=st), t, d, settings=st)
-        runs[factor] = out
+        with warnings.catch_warnings():
+            # run_rig places the plate at the target indentation plus the bone's descent every
+            # step, so the penetration is prescribed and the free-body stability bound of a
+            # light indenter (SkinRangeWarning "unstable at timestep") does not apply here
+            warnings.filterwarnings("ignore", message=r"pair 'skin_plate': unstable at timestep",
+                                    category=SkinRangeWarning)
+            model = build_rig(representation, params, settings=st)
+        runs[factor] = run_rig(model, t, d, settings=st)
     ref = runs[1.0]
     worst = 0.0
     for factor in MASS_FACTORS:
