@@ -485,14 +485,19 @@ def skin() -> None:
 @click.option("--max-force", "max_force", type=Number(0.5, 20.0, unit="N"), default=None,
               help="Fit each skin's soft contact to its FE loading curve up to this force, "
                    "0.5-20 N (more accurate below it) [default: the shipped 0-20 N law].")
-def skin_apply(hand, out, geom_items, against, max_force) -> None:
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the skinned geoms and every change made to HAND as JSON.")
+def skin_apply(hand, out, geom_items, against, max_force, as_json) -> None:
     """Give the named geoms of the MJCF HAND a calibrated skin and write the model to OUT (.xml).
 
     Each skinned geom meets each counterpart through a <pair> with the design's law in
-    solref/solimp, mass-compensated; the output loads in plain MuJoCo."""
+    solref/solimp, mass-compensated; its own contype/conaffinity become 0. OUT is HAND's text
+    with only those changes (and absolute asset paths when OUT is in another folder), listed
+    here and in a comment at its top; the output loads in plain MuJoCo."""
     import mujoco
 
-    from softhand.skin.apply import apply_skin, parse_geom_skins, skin_law_error, write_skinned
+    from softhand.skin.apply import apply_skin, check_skinnable, parse_geom_skins, write_skinned
+    from softhand.skin.apply import skin_law_error as law_error
 
     source = Path(hand)
     if not source.is_file():
@@ -509,19 +514,43 @@ def skin_apply(hand, out, geom_items, against, max_force) -> None:
         spec.compile()
     except ValueError as exc:
         bad(f"HAND {hand!r} does not load in MuJoCo: {str(exc).splitlines()[0]}")
+    known = {g.name for g in spec.geoms}
+    try:
+        check_skinnable(source, [g for g in geoms if g in known])
+    except ValueError as exc:
+        bad(f"--geom: HAND {hand!r}: {exc}")
     try:
         skinned = apply_skin(spec, {g: f"{d}@{r}" for g, (d, r) in geoms.items()},
                              against=list(against) or None, max_force_N=max_force)
     except ValueError as exc:
         bad(f"--geom / --against: {exc}")
-    path = write_skinned(spec, skinned, source, target)
+    try:
+        written = write_skinned(spec, skinned, source, target)
+    except ValueError as exc:
+        bad(f"OUT {out!r}: {exc}")
+    rows = []
     for s in skinned:
-        err = "" if s.law is None else (f"; law vs its FE loading curve up to 2 N: "
-                                         f"{skin_law_error(s.design, s.law):.2f} % RMS of 2 N")
+        err = None if s.law is None else law_error(s.design, s.law)
+        rows.append({"geom": s.geom, "design": s.design, "representation": s.representation,
+                     "pairs": dict(s.pair_laws), "law_rms_pct_of_2N_to_2N": err})
+    if as_json:
+        click.echo(json.dumps({"out": str(written.path), "source": str(source),
+                               "skinned": rows,
+                               "changes": [c.to_dict() for c in written.changes]}, indent=1))
+        return
+    for s, row in zip(skinned, rows, strict=True):
+        err = row["law_rms_pct_of_2N_to_2N"]
+        err = "" if err is None else f"; law vs its FE loading curve up to 2 N: {err:.2f} % RMS of 2 N"
         classes = Counter(s.pair_laws.values())
         laws = ", ".join(f"{n} {k}" for k, n in sorted(classes.items()))
-        click.echo(f"{s.geom}: {s.design}@{s.representation}, {len(s.pairs)} pairs ({laws}){err}")
-    click.echo(f"wrote {path}")
+        n = len(s.pairs)
+        click.echo(f"{s.geom}: {s.design}@{s.representation}, {n} pair{'s' * (n != 1)} "
+                   f"({laws}){err}")
+    click.echo(f"changed in {source.name} (everything else is kept as written):")
+    width = max(len(c.element) for c in written.changes)
+    for c in written.changes:
+        click.echo(f"  {c.element:<{width}}  {c.change}")
+    click.echo(f"wrote {written.path}")
 
 
 @skin.command("flex-press")

@@ -152,3 +152,214 @@ def test_each_pair_takes_the_law_of_its_contact_class():
         solref, solimp = pair_law_values(model, name, law)
         np.testing.assert_allclose(spec.pair(name).solref, solref, rtol=1e-12)
         np.testing.assert_allclose(spec.pair(name).solimp, solimp, rtol=1e-12)
+
+
+# --- what skin apply writes: the user's file with only the listed changes ------------------
+
+#: A user's hand in their own style: a leading comment and comments between elements, tab
+#: indentation, attributes in an unusual order, on several lines and in single quotes, default
+#: classes, an include (the plate), a character reference, and a <contact> section of its own.
+USER_HAND = """<?xml version="1.0" encoding="utf-8"?>
+<!-- my hand: keep this comment -->
+<mujoco model='user hand'>
+\t<compiler autolimits="true" angle="radian"/>
+\t<option cone="elliptic" timestep="0.002"/>
+\t<default>
+\t\t<default class="skin">
+\t\t\t<geom type="capsule" contype="1" conaffinity="1" friction="0.7 0.01 0.001"/>
+\t\t</default>
+\t</default>
+
+\t<worldbody>
+\t\t<!-- the finger -->
+\t\t<body pos="0 0 0.5" name="finger">
+\t\t\t<joint axis="0 1 0" name="mcp" damping="0.05" range="-0.3 1.6"/>
+\t\t\t<geom size="0.009" fromto="0 0 0 0.04 0 0" mass="0.03" class="skin" name="proximal"/>
+\t\t\t<body name="distal" pos="0.04 0 0">
+\t\t\t\t<joint name="dip" axis="0 1 0" damping="0.05" range="0 1.2"/>
+\t\t\t\t<geom mass="0.03"
+\t\t\t\t      name='tip'   class='skin'
+\t\t\t\t      fromto='0 0 0 0.02 0 0' size='0.0075'   contype='1'/>
+\t\t\t</body>
+\t\t</body>
+\t</worldbody>
+\t<include file="plate_part.xml"/>
+
+\t<contact>
+\t\t<!-- the user's own exclusion &#169; -->
+\t\t<exclude body1="finger" body2="distal"/>
+\t</contact>
+\t<actuator><position joint="mcp" kp="3" name="mcp"/></actuator>
+</mujoco>
+"""
+
+PLATE_PART = """<mujoco>
+  <worldbody>
+    <body name="plate" mocap="true" pos="0.3 0 0.5">
+      <geom name="plate" type="box" size="0.006 0.006 0.002"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _user_hand(folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "plate_part.xml").write_text(PLATE_PART)
+    path = folder / "user_hand.xml"
+    path.write_text(USER_HAND)
+    return path
+
+
+def _tree(path: Path):
+    import xml.etree.ElementTree as ET
+
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    return ET.parse(path, parser=parser).getroot()
+
+
+def _same_tree(a, b, where="mujoco") -> None:
+    """Tags, attributes in order, comments and non-blank text equal, recursively."""
+    assert a.tag == b.tag, where
+    assert list(a.attrib.items()) == list(b.attrib.items()), where
+    assert (a.text or "").strip() == (b.text or "").strip(), where
+    assert len(a) == len(b), where
+    for i, (x, y) in enumerate(zip(a, b, strict=True)):
+        _same_tree(x, y, f"{where}/{getattr(x.tag, '__name__', x.tag)}[{i}]")
+
+
+def test_written_file_is_the_source_with_only_the_listed_changes(tmp_path):
+    """Parsed, the output is the input plus the pairs and the skinned geoms' flags; as text,
+    every line outside the header comment, the changed geom tags and the new pairs is the
+    input's, in order; the changes listed are exactly those."""
+    import difflib
+
+    source = _user_hand(tmp_path)
+    spec = mujoco.MjSpec.from_file(str(source))
+    skinned = apply_skin(spec, ["tip=pocket2-sil", "proximal=solid-pu"])
+    written = write_skinned(spec, skinned, source, tmp_path / "skinned.xml")
+    assert [str(c) for c in written.changes] == [
+        '<geom name="tip">: contype 1 -> 0, conaffinity 1 -> 0 (it touches its counterparts '
+        'only through its pairs)',
+        '<geom name="proximal">: contype 1 -> 0, conaffinity 1 -> 0 (it touches its '
+        'counterparts only through its pairs)',
+        '<pair name="skin_tip__plate">: added: tip against plate, pocket2-sil soft contact, '
+        'phalanx/flat law',
+        '<pair name="skin_proximal__plate">: added: proximal against plate, solid-pu soft '
+        'contact, phalanx/flat law']
+    # parsed: undo the documented changes on the output, then it is the input
+    before, after = _tree(source), _tree(written.path)
+    for geom in after.iter("geom"):
+        if geom.get("name") == "tip":  # contype was written (in place), conaffinity added
+            assert list(geom.attrib)[-2:] == ["contype", "conaffinity"]
+            assert geom.get("contype") == geom.get("conaffinity") == "0"
+            geom.set("contype", "1")
+            del geom.attrib["conaffinity"]
+        if geom.get("name") == "proximal":
+            assert list(geom.attrib)[-2:] == ["contype", "conaffinity"]
+            del geom.attrib["contype"], geom.attrib["conaffinity"]
+    (contact,) = after.findall("contact")
+    pairs = contact.findall("pair")
+    assert [(p.get("name"), p.get("geom1"), p.get("geom2")) for p in pairs] == [
+        ("skin_tip__plate", "tip", "plate"), ("skin_proximal__plate", "proximal", "plate")]
+    for p in pairs:
+        np.testing.assert_array_equal(np.fromstring(p.get("solref"), sep=" "),
+                                      spec.pair(p.get("name")).solref)
+        contact.remove(p)
+    _same_tree(before, after)
+    # as text: the diff holds the header comment, the two geom lines and the pairs, no more
+    old = source.read_text().splitlines()
+    new = written.path.read_text().splitlines()
+    head_end = new.index("-->")
+    assert new[head_end + 1:head_end + 3] == old[1:3] and new[0] == old[0]  # declaration kept
+    changed = []
+    for op, i1, i2, j1, j2 in difflib.SequenceMatcher(None, old, new, autojunk=False).get_opcodes():
+        if op == "equal":
+            continue
+        changed += [("-", line) for line in old[i1:i2]] + [("+", j, new[j]) for j in range(j1, j2)]
+    removed = [c[1] for c in changed if c[0] == "-"]
+    added = [c[1:] for c in changed if c[0] == "+"]
+    assert removed == [
+        '\t\t\t<geom size="0.009" fromto="0 0 0 0.04 0 0" mass="0.03" class="skin" name="proximal"/>',
+        "\t\t\t\t      fromto='0 0 0 0.02 0 0' size='0.0075'   contype='1'/>"]
+    # the header: one comment block right after the XML declaration
+    assert [j for j, _ in added[:head_end]] == list(range(1, head_end + 1))
+    outside_header = [line for j, line in added if j > head_end]
+    assert outside_header[:2] == [
+        '\t\t\t<geom size="0.009" fromto="0 0 0 0.04 0 0" mass="0.03" class="skin" name="proximal"'
+        ' contype="0" conaffinity="0"/>',
+        "\t\t\t\t      fromto='0 0 0 0.02 0 0' size='0.0075'   contype='0' conaffinity='0'/>"]
+    assert len(outside_header) == 4  # and the two pairs, after the user's <exclude>
+    assert all(line.startswith('\t\t<pair name="skin_') for line in outside_header[2:])
+    assert new[new.index(outside_header[2]) - 1] == '\t\t<exclude body1="finger" body2="distal"/>'
+    # the file loads in plain MuJoCo and is the skinned model
+    model = mujoco.MjModel.from_xml_path(str(written.path))
+    assert model.geom_contype[model.geom("tip").id] == 0
+    assert model.npair == 2 and model.nexclude == 1
+
+
+def test_a_file_written_elsewhere_gets_absolute_paths_and_says_so(tmp_path):
+    source = _user_hand(tmp_path / "src")
+    mesh = tmp_path / "src" / "meshes"
+    mesh.mkdir()
+    (mesh / "knob.obj").write_text("v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0 0 0.01\n"
+                                   "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    text = source.read_text().replace(
+        "\t<worldbody>", '\t<asset><mesh name="knob" file="meshes/knob.obj"/></asset>\n'
+        '\t<worldbody>\n\t\t<geom type="mesh" mesh="knob" pos="0 0.3 0" contype="0" '
+        'conaffinity="0"/>')
+    source.write_text(text)
+    spec = mujoco.MjSpec.from_file(str(source))
+    skinned = apply_skin(spec, ["tip=solid-pu"])
+    written = write_skinned(spec, skinned, source, tmp_path / "elsewhere" / "skinned.xml")
+    src = (tmp_path / "src").resolve()
+    assert [str(c) for c in written.changes][-2:] == [
+        f'<include file="plate_part.xml">: file made absolute: {src / "plate_part.xml"}',
+        f"<compiler>: meshdir added: {src} (the source's folder, where its relative asset "
+        "files are)"]
+    model = mujoco.MjModel.from_xml_path(str(written.path))
+    assert model.nmesh == 1 and model.npair == 1
+
+
+def test_a_geom_only_in_an_included_file_is_refused_before_any_work(tmp_path):
+    from softhand.skin.apply import check_skinnable
+
+    source = _user_hand(tmp_path)
+    with pytest.raises(ValueError, match=r"geom 'plate' is not written by name in "
+                                         r"user_hand.xml \(it is in the included file "
+                                         r"'plate_part.xml'\)"):
+        check_skinnable(source, ["tip", "plate"])
+
+
+def test_cli_lists_the_changes_and_writes_them(tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    source = _user_hand(tmp_path)
+    out = tmp_path / "skinned.xml"
+    res = CliRunner().invoke(main, ["skin", "apply", str(source), str(out),
+                                    "--geom", "tip=pocket2-sil"])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[1] == "changed in user_hand.xml (everything else is kept as written):"
+    assert lines[2].split() == ['<geom', 'name="tip">', "contype", "1", "->", "0,",
+                                "conaffinity", "1", "->", "0", "(it", "touches", "its",
+                                "counterparts", "only", "through", "its", "pairs)"]
+    assert lines[3].startswith('  <pair name="skin_tip__plate">  added: tip against plate')
+    assert lines[-1] == f"wrote {out}"
+    assert "warning" not in res.output  # a 2 ms step: the contact is stable (issue 24)
+    header = out.read_text().split("-->")[0]
+    assert '<pair name="skin_tip__plate">: added: tip against plate' in header
+    res = CliRunner().invoke(main, ["skin", "apply", str(source), str(out), "--json",
+                                    "--geom", "tip=pocket2-sil"])
+    doc = json.loads(res.output)
+    assert [c["element"] for c in doc["changes"]] == ['<geom name="tip">',
+                                                      '<pair name="skin_tip__plate">']
+    res = CliRunner().invoke(main, ["skin", "apply", str(source), str(tmp_path / "x.xml"),
+                                    "--geom", "plate=pocket2-sil"])
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "geom 'plate' is not written by name in user_hand.xml" in res.output
+    assert not (tmp_path / "x.xml").exists()

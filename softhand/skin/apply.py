@@ -39,8 +39,12 @@ skin pads on an :class:`mujoco.MjSpec`:
   (:func:`softhand.skin.representations.add_hand_pad` does that for a known normal);
   ``flex`` needs the ``discrete`` integrator (softhand.hands.flex_region).
 
-The result is plain MJCF: :func:`write_skinned` writes ``spec.to_xml()`` with a header comment
-that records the designs, laws and the softhand version, and plain MuJoCo loads it.
+The result is plain MJCF that plain MuJoCo loads: :func:`write_skinned` writes the *source
+file's own text* with only these changes spliced in (collision flags of the skinned geoms, the
+``<pair>`` elements, absolute asset paths when the output is in another folder), lists them
+(:class:`ModelChange`) and records them, the designs, laws and softhand version in a header
+comment; comments, attribute order, indentation and includes stay as the user wrote them
+(:mod:`softhand.skin.mjcf_edit`).
 """
 
 from __future__ import annotations
@@ -61,8 +65,9 @@ from softhand.skin.representations import StockContact, get_representation, load
 from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
-__all__ = ["APPLY_REPRESENTATIONS", "SkinnedGeom", "apply_skin", "parse_geom_skins",
-           "skin_law_error", "write_skinned"]
+__all__ = ["APPLY_REPRESENTATIONS", "ModelChange", "SkinnedFile", "SkinnedGeom", "apply_skin",
+           "check_skinnable", "parse_geom_skins", "skin_law_error", "skinned_text",
+           "write_skinned"]
 
 #: the representations skin apply writes (the others need a body per pad, or are rig-only)
 APPLY_REPRESENTATIONS = ("soft-contact", "rigid")
@@ -82,6 +87,8 @@ class SkinnedGeom:
     #: per pair: the contact class of its two geoms and the law it got (the class, or
     #: ``plate`` where the skin has no law of the class; :mod:`softhand.skin.contact_classes`)
     pair_laws: dict[str, str] = field(default_factory=dict)
+    #: the geom's (contype, conaffinity) before it was skinned (after its default classes)
+    flags_before: tuple[int, int] = (0, 0)
 
 
 def parse_geom_skins(items: Mapping[str, str] | Sequence[str]) -> dict[str, tuple[str, str]]:
@@ -248,8 +255,10 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
     laws = {design: _law(design, max_force_N, skins_dir, fe_dir)
             for design, rep in chosen.values() if rep == "soft-contact"}
     made: dict[str, list[str]] = {}
+    before: dict[str, tuple[int, int]] = {}
     for geom in chosen:
         g = spec.geom(geom)
+        before[geom] = (int(g.contype), int(g.conaffinity))
         g.contype, g.conaffinity = 0, 0
         made[geom] = []
         for other in others:
@@ -284,32 +293,261 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
             used[name] = key if this is not law or key == PLATE_CLASS else f"{key}: plate law"
             pair.solref, pair.solimp = pair_law_values(model, name, this, issues=issues)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
-                               None if law is None else max_force_N, used))
+                               None if law is None else max_force_N, used, before[geom]))
     warn_range_issues(issues)
     return out
 
 
-def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
-                  out: str | os.PathLike) -> Path:
-    """Write the skinned ``spec`` as MJCF to ``out`` (atomically), with a header comment that
-    records what was skinned and how; asset folders are made absolute so that the file loads
-    from anywhere. Returns the path."""
-    from softhand.io import atomic_write_text
+@dataclass(frozen=True)
+class ModelChange:
+    """One change ``skin apply`` makes to the user's MJCF: the element (as a tag that finds it in
+    the file) and what changed (``contype 1 -> 0``, ``added: ...``)."""
 
+    element: str
+    change: str
+
+    def to_dict(self) -> dict[str, str]:
+        return {"element": self.element, "change": self.change}
+
+    def __str__(self) -> str:
+        return f"{self.element}: {self.change}"
+
+
+@dataclass(frozen=True)
+class SkinnedFile:
+    """What :func:`write_skinned` wrote: the file (``str()`` and ``os.fspath`` give its path)
+    and every change made to the source, in file order of kind (flags, pairs, paths)."""
+
+    path: Path
+    changes: tuple[ModelChange, ...]
+
+    def __fspath__(self) -> str:
+        return str(self.path)
+
+    def __str__(self) -> str:
+        return str(self.path)
+
+
+ASSET_FILES = {"mesh": ("file",), "hfield": ("file",), "skin": ("file",),
+               "texture": ("file", "fileright", "fileleft", "fileup", "filedown", "filefront",
+                           "fileback")}
+
+
+def check_skinnable(source: str | os.PathLike, geoms: Sequence[str]) -> None:
+    """Check, before any work, that :func:`write_skinned` can edit ``source`` for ``geoms``:
+    the file is well-formed MJCF and each geom is written by name in it (not only in a file it
+    includes, which skin apply does not rewrite, nor made by ``<replicate>``).
+
+    Raises:
+        ValueError: naming the file, the geom and where it is.
+    """
+    from softhand.skin.mjcf_edit import MjcfEditor, MjcfError
+
+    try:
+        editor = MjcfEditor.from_file(source)
+    except (OSError, MjcfError) as exc:
+        raise ValueError(str(exc)) from None
     src = Path(source).resolve().parent
-    for attr in ("meshdir", "texturedir"):  # asset paths relative to the source file
-        value = getattr(spec, attr)
+    for geom in geoms:
+        found = editor.find("geom", name=geom)
+        if len(found) == 1:
+            continue
+        if len(found) > 1:
+            raise ValueError(f"geom {geom!r} is written {len(found)} times in {editor.name}")
+        where = ""
+        for inc in editor.find("include"):
+            path = src / inc.attrs.get("file", "")
+            try:
+                if MjcfEditor.from_file(path).find("geom", name=geom):
+                    where = f" (it is in the included file {inc.attrs['file']!r})"
+            except (OSError, MjcfError):
+                continue
+        raise ValueError(f"geom {geom!r} is not written by name in {editor.name}{where}: skin "
+                         "apply edits only the file given (it writes one file and keeps the "
+                         "files it includes as they are); give it the file that defines the "
+                         "geom, with its counterparts, or paste the include into it")
+
+
+def _numbers(values) -> str:
+    return " ".join(repr(float(v)) for v in values)
+
+
+def _absolute_paths(editor, src: Path, changes: list[ModelChange]) -> None:
+    """Make the file's relative asset folders and includes absolute (the output lives in
+    another folder than the source)."""
+    from softhand.skin.mjcf_edit import MjcfEditor, MjcfError
+
+    def absolute(value: str) -> str:
+        return str((src / value).resolve())
+
+    for inc in editor.find("include"):
+        value = inc.attrs.get("file", "")
         if value and not Path(value).is_absolute():
-            setattr(spec, attr, str((src / value).resolve()))
-    lines = [f"Skinned by softhand {__version__} (softhand skin apply) from {Path(source).name};",
-             f"MuJoCo {mujoco.__version__}. Laws: shipped calibration, mass-compensated per pair."]
+            editor.set_attr(inc, "file", absolute(value))
+            changes.append(ModelChange(f'<include file="{value}">',
+                                       f"file made absolute: {absolute(value)}"))
+    compilers = editor.find("compiler")
+    dirs = {}
+    for comp in compilers:
+        for attr in ("assetdir", "meshdir", "texturedir"):
+            value = comp.attrs.get(attr)
+            if value is None:
+                continue
+            dirs[attr] = value
+            if not Path(value).is_absolute():
+                editor.set_attr(comp, attr, absolute(value))
+                changes.append(ModelChange("<compiler>", f"{attr} {value!r} made absolute: "
+                                                         f"{absolute(value)}"))
+    files = [editor] + [e for e in (_try_editor(src / i.attrs.get("file", ""), MjcfEditor,
+                                                MjcfError) for i in editor.find("include")) if e]
+    need = set()
+    for ed in files:
+        for tag, attrs in ASSET_FILES.items():
+            for el in ed.find(tag):
+                if any(el.attrs.get(a) and not Path(el.attrs[a]).is_absolute() for a in attrs):
+                    need.add("texturedir" if tag == "texture" else "meshdir")
+    add = sorted(a for a in need if a not in dirs and "assetdir" not in dirs)
+    if not add:
+        return
+    if compilers:
+        for attr in add:
+            editor.set_attr(compilers[0], attr, str(src))
+            changes.append(ModelChange("<compiler>", f"{attr} added: {src} (the source's "
+                                                     "folder, where its relative asset files are)"))
+    else:
+        attrs = " ".join(f'{a}="{src}"' for a in add)
+        editor.prepend_child(editor.root, f"<compiler {attrs}/>".encode())
+        changes.append(ModelChange("<compiler>", f"added as the first element, {', '.join(add)} "
+                                                 f"= {src} (the source's folder, where its "
+                                                 "relative asset files are)"))
+
+
+def _try_editor(path, cls, error):
+    try:
+        return cls.from_file(path)
+    except (OSError, error):
+        return None
+
+
+def skinned_text(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
+                 out: str | os.PathLike) -> tuple[bytes, tuple[ModelChange, ...]]:
+    """The text of ``source`` with the changes :func:`apply_skin` made to ``spec``, and the list
+    of them (see :func:`write_skinned`)."""
+    from softhand.skin.mjcf_edit import MjcfEditor
+
+    check_skinnable(source, [s.geom for s in skinned])
+    editor = MjcfEditor.from_file(source)
+    changes: list[ModelChange] = []
     for s in skinned:
-        fit = ("shipped 0-20 N law" if s.fit_range_N is None
+        (el,) = editor.find("geom", name=s.geom)
+        parts = []
+        for key, old in zip(("contype", "conaffinity"), s.flags_before, strict=True):
+            if old != 0:
+                editor.set_attr(el, key, "0")
+                parts.append(f"{key} {old} -> 0")
+        what = (", ".join(parts) + " (it touches its counterparts only through its pairs)"
+                if parts else "contype and conaffinity already 0: unchanged")
+        changes.append(ModelChange(f'<geom name="{s.geom}">', what))
+    lines = []
+    for s in skinned:
+        for name in s.pairs:
+            p = spec.pair(name)
+            lines.append(f'<pair name="{name}" geom1="{p.geomname1}" geom2="{p.geomname2}" '
+                         f'condim="{p.condim}" friction="{_numbers(p.friction)}" '
+                         f'solref="{_numbers(p.solref)}" solimp="{_numbers(p.solimp)}"/>')
+            law = ("MuJoCo's stock contact" if s.law is None
+                   else f"{s.design} soft contact, {s.pair_laws.get(name, '')} law")
+            changes.append(ModelChange(f'<pair name="{name}">',
+                                       f"added: {p.geomname1} against {p.geomname2}, {law}"))
+    contacts = [c for c in editor.root.children if c.tag == "contact"]
+    if contacts:
+        for line in lines:
+            editor.append_child(contacts[-1], line.encode())
+    elif lines:
+        nl, inner = editor.newline, editor.child_indent(editor.root) + editor.indent_unit()
+        outer = editor.child_indent(editor.root)
+        block = (b"<contact>" + b"".join(nl + inner + line.encode() for line in lines)
+                 + nl + outer + b"</contact>")
+        editor.append_child(editor.root, block)
+        changes.insert(len(skinned), ModelChange("<contact>", "added at the end of <mujoco> "
+                                                              "(the model had none): the pairs"))
+    src = Path(source).resolve().parent
+    if Path(out).resolve().parent != src:
+        _absolute_paths(editor, src, changes)
+    header = [f"Skinned by softhand {__version__} (softhand skin apply) from {Path(source).name}; "
+              f"MuJoCo {mujoco.__version__}.",
+              "Laws: shipped calibration, mass-compensated per pair."]
+    for s in skinned:
+        fit = ("MuJoCo's stock contact" if s.law is None
+               else "shipped 0-20 N law" if s.fit_range_N is None
                else f"soft contact fitted to the FE loading curve up to {s.fit_range_N:g} N")
-        lines.append(f"{s.geom}: {s.design}@{s.representation} ({fit}), {len(s.pairs)} pairs; "
-                     + ", ".join(f"{p}: {k}" for p, k in s.pair_laws.items()))
-    header = "<!--\n" + "\n".join(f"  {line}" for line in lines) + "\n-->\n"
-    spec.compile()
+        n = len(s.pairs)
+        header.append(f"{s.geom}: {s.design}@{s.representation} ({fit}), {n} pair{'s' * (n != 1)}; "
+                      + ", ".join(f"{p}: {k}" for p, k in s.pair_laws.items()))
+    header.append(f"Changed from {Path(source).name} (the rest is as written there):")
+    header += [f"  {c}" for c in changes]
+    nl = editor.newline.decode()
+    body = nl.join(f"  {line}".replace("--", "- -") for line in header)
+    editor.insert_at_top(f"<!--{nl}{body}{nl}-->{nl}".encode())
+    return editor.text(), tuple(changes)
+
+
+def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
+                  out: str | os.PathLike) -> SkinnedFile:
+    """Write the skinned model to ``out`` (atomically) as the text of ``source`` with only the
+    changes :func:`apply_skin` made, and return them with the path.
+
+    The changes, each listed in :attr:`SkinnedFile.changes` and in a header comment at the top
+    of the file:
+
+    * each skinned geom's ``contype`` and ``conaffinity`` set to 0 where they were not (the old
+      values are the geom's after its default classes; an attribute written in the tag gets its
+      new value in place, a missing one is added after the tag's last attribute);
+    * one ``<pair>`` per skinned geom and counterpart, after the last child of the file's last
+      top-level ``<contact>`` (a new ``<contact>`` at the end of ``<mujoco>`` if it has none),
+      with the pair's geoms, ``condim``, ``friction``, ``solref`` and ``solimp`` (the law, in
+      full precision);
+    * when ``out`` is in another folder than ``source``: relative ``<include file>``,
+      ``<compiler>`` ``assetdir``/``meshdir``/``texturedir`` made absolute, and ``meshdir`` or
+      ``texturedir`` (set to the source's folder) added to ``<compiler>`` (or a new first
+      ``<compiler>``) when relative asset files need it, so that the file loads from anywhere.
+
+    Everything else is kept byte for byte (:mod:`softhand.skin.mjcf_edit`): comments, attribute
+    and element order, indentation, blank lines, quotes, character references, ``<include>``
+    and defaults. A new element takes the indentation of its parent's first child and the
+    file's line ending; its attributes are in double quotes (single where the edited tag uses
+    them). The written file is loaded with MuJoCo and checked against the skinned ``spec``
+    (geoms' collision flags and every pair's values) before it replaces ``out``.
+
+    Raises:
+        ValueError: a geom is not written by name in ``source`` (:func:`check_skinnable`), or
+            the written file does not compile to the skinned spec.
+    """
+    import tempfile
+
+    from softhand.io import atomic_open
+
+    text, changes = skinned_text(spec, skinned, source, out)
+    expected = spec.compile()
     path = Path(out)
-    atomic_write_text(path, header + spec.to_xml())
-    return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # checked from a file in the output's folder, where its relative paths resolve
+    fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".check.xml", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(text)
+        try:
+            got = mujoco.MjModel.from_xml_path(probe)
+        except ValueError as exc:
+            raise ValueError(f"the skinned {path.name} does not load in MuJoCo: "
+                             f"{str(exc).splitlines()[0]}") from None
+    finally:
+        os.unlink(probe)
+    for attr in ("geom_contype", "geom_conaffinity", "pair_geom1", "pair_geom2", "pair_dim",
+                 "pair_friction", "pair_solref", "pair_solimp", "pair_margin", "pair_gap"):
+        if not np.array_equal(getattr(got, attr), getattr(expected, attr)):
+            raise ValueError(f"the skinned {path.name} compiles to other {attr} than the skinned "
+                             "model (a softhand bug: please report it with the source file)")
+    with atomic_open(path, "wb") as fh:
+        fh.write(text)
+    return SkinnedFile(path, changes)
