@@ -1,7 +1,9 @@
 """Controllers of the prosthetic hand, for testing grasp control in the handshake.
 
-Both map an observation and the env's ``info`` to an action in ``[-1, 1]^6`` (finger motors,
-thumb flexion, thumb rotation; positive closes):
+Each maps an observation and the env's ``info`` to an action in ``[-1, 1]^6`` (finger motors,
+thumb flexion, thumb rotation; positive closes): ``ctrl(obs, info)`` for a single env, and
+``ctrl.actions(obs, info, region_names)`` for W worlds of the vector env (softhand.envs.vector)
+at once, with per-world state; both are the same array code (one world for a single env):
 
 * :class:`OpenLoopClose`: rotate the thumb to its handshake posture, close every digit at a fixed
   speed for a fixed time once the partner grips, hold, open when it lets go (what a myoelectric
@@ -23,6 +25,7 @@ latency, noise, threshold and quantization, and nothing inside a pocket's dead b
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -57,16 +60,79 @@ _GRIPPING = ("grip", "shake")
 #: while the partner's hand still lies under it swept it through that hand (14-18 N on Thumb1-2
 #: and 1.4 N bone on bone in the release of the default handshake).
 _RELEASE = ("release", "return", "done")
-def _thumb_to_handshake(info: dict) -> float:
+
+
+class _Worlds:
+    """What the controllers read, over W worlds: phases (W,), times (s), region forces (W,
+    regions) from the chosen signal, thumb rotation and the grasp's (rad). Built from a single
+    env's ``info`` (W = 1, dicts keyed by region) or from the vector env's (arrays; its
+    ``region_names``)."""
+
+    def __init__(self, info: Mapping, key: str | None,
+                 region_names: Sequence[str] | None = None) -> None:
+        single = isinstance(info["phase"], str)
+        wrap = (lambda v: np.array([v])) if single else np.asarray
+        self.phase = wrap(info["phase"]).astype(str)
+        self.time_s = wrap(info["time_s"]).astype(float)
+        self.thumb = wrap(info["thumb_rotation_rad"]).astype(float)
+        self.grasp_thumb = wrap(info["grasp_thumb_rotation_rad"]).astype(float)
+        self.n = self.phase.size
+        self.gripping = np.isin(self.phase, _GRIPPING)
+        self.releasing = np.isin(self.phase, _RELEASE)
+        if key is not None:
+            forces = info[key]
+            if single:
+                self.regions = list(forces)
+                self.forces = np.array([[forces[r] for r in self.regions]], float)
+            else:
+                self.regions = list(region_names)
+                self.forces = np.asarray(forces, float)
+
+    def digit(self, name: str, only: tuple[str, ...] | None = None) -> np.ndarray:
+        """(W,) the largest force over a digit's regions (``only``: those regions)."""
+        cols = [i for i, r in enumerate(self.regions)
+                if (r in only if only else r.startswith(name))]
+        return self.forces[:, cols].max(axis=1)
+
+
+def _thumb_to_handshake(w: _Worlds) -> np.ndarray:
     """Thumb-rotation speed command (in [-1, 1]) towards the grasp's thumb rotation
     (``info["grasp_thumb_rotation_rad"]``, solved from the handshake's contacts, so that the thumb
     lies over the back of the partner's index metacarpal instead of pointing into its palm)."""
-    return float(np.clip(4.0 * (info["grasp_thumb_rotation_rad"] - info["thumb_rotation_rad"]),
-                         -1.0, 1.0))
+    return np.clip(4.0 * (w.grasp_thumb - w.thumb), -1.0, 1.0)
+
+
+class _Controller:
+    """A controller's two entries: ``ctrl(obs, info)`` for a single env (one action (6,)), and
+    ``ctrl.actions(obs, info, region_names)`` for the vector env (W actions (W, 6), ``info`` its
+    arrays); both run :meth:`_act` over arrays of worlds, which keeps each world's state."""
+
+    signal: str | None = None
+
+    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
+        return self._act(_Worlds(info, self._key()))[0]
+
+    def actions(self, obs: np.ndarray, info: Mapping,
+                region_names: Sequence[str]) -> np.ndarray:
+        return self._act(_Worlds(info, self._key(), region_names))
+
+    def _key(self) -> str | None:
+        return SIGNALS[self.signal] if self.signal is not None else None
+
+    def _state(self, name: str, shape: tuple[int, ...], fill) -> np.ndarray:
+        """Per-world state, (re)made when the number of worlds changes."""
+        x = getattr(self, name, None)
+        if x is None or x.shape != shape:
+            x = np.full(shape, fill)
+            setattr(self, name, x)
+        return x
+
+    def _act(self, w: _Worlds) -> np.ndarray:
+        raise NotImplementedError
 
 
 @dataclass
-class OpenLoopClose:
+class OpenLoopClose(_Controller):
     """Close at ``speed`` (fraction of the maximum) for ``close_s`` from the start of the grip,
     hold (the motors are not back-drivable), open afterwards; the thumb goes to its handshake
     rotation. Open loop: the closure does not depend on the forces. The default closes each
@@ -85,23 +151,22 @@ class OpenLoopClose:
         check_number("speed", self.speed, lo=SPEED_RANGE[0], hi=SPEED_RANGE[1], lo_open=True)
         check_number("close_s", self.close_s, lo=CLOSE_S_RANGE[0], hi=CLOSE_S_RANGE[1],
                      lo_open=True, why="s")
-        self._start: float | None = None
+        self._start: np.ndarray | None = None  # per world: the grip's start (s), nan before
 
-    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
-        a = np.zeros(6)
-        if info["phase"] in _GRIPPING:
-            if self._start is None:
-                self._start = info["time_s"]
-            a[:5] = self.speed if info["time_s"] - self._start < self.close_s else 0.0
-            a[5] = _thumb_to_handshake(info)
-        elif info["phase"] in _RELEASE:
-            self._start = None
-            a[:5] = -1.0  # open; the thumb keeps its rotation (_RELEASE)
+    def _act(self, w: _Worlds) -> np.ndarray:
+        start = self._state("_start", (w.n,), np.nan)
+        a = np.zeros((w.n, 6))
+        g, r = w.gripping, w.releasing
+        start[g & np.isnan(start)] = w.time_s[g & np.isnan(start)]
+        a[g, :5] = np.where(w.time_s[g] - start[g] < self.close_s, self.speed, 0.0)[:, None]
+        a[g, 5] = _thumb_to_handshake(w)[g]
+        start[r] = np.nan
+        a[r, :5] = -1.0  # open; the thumb keeps its rotation (_RELEASE)
         return a
 
 
 @dataclass
-class ForceRegulating:
+class ForceRegulating(_Controller):
     """Hold ``target_N`` on each digit's most loaded region with a proportional speed command.
 
     Settings: ``target_N`` in [0.05, 20] N, ``gain_per_N`` in (0, 10] per N, ``signal``
@@ -118,23 +183,19 @@ class ForceRegulating:
         check_number("gain_per_N", self.gain_per_N, lo=GAIN_RANGE_PER_N[0],
                      hi=GAIN_RANGE_PER_N[1], lo_open=True, why="per N")
 
-    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
-        a = np.zeros(6)
-        if info["phase"] not in _GRIPPING:
-            a[:5] = -1.0 if info["phase"] in _RELEASE else 0.0  # the thumb keeps its rotation
-            return a
-        forces = info[SIGNALS[self.signal]]
+    def _act(self, w: _Worlds) -> np.ndarray:
+        a = np.zeros((w.n, 6))
+        a[w.releasing, :5] = -1.0  # the thumb keeps its rotation
+        g = w.gripping
         for i, digit in enumerate(_DIGITS):
-            f = max(v for k, v in forces.items() if k.startswith(digit))
-            a[i] = np.clip(self.gain_per_N * (self.target_N - f), -1.0, 1.0)
+            a[g, i] = np.clip(self.gain_per_N * (self.target_N - w.digit(digit)[g]), -1.0, 1.0)
         # the thumb swings to its handshake rotation only while it holds less than the target
-        thumb = max(v for k, v in forces.items() if k.startswith("Thumb"))
-        a[5] = _thumb_to_handshake(info) if thumb < self.target_N else 0.0
+        a[g, 5] = np.where(w.digit("Thumb")[g] < self.target_N, _thumb_to_handshake(w)[g], 0.0)
         return a
 
 
 @dataclass
-class Neutral:
+class Neutral(_Controller):
     """Close each digit at ``speed`` until its most loaded region (the thumb: its pad, Thumb2)
     exceeds ``touch_N``, then hold; the thumb rotates to the grasp's rotation.
 
@@ -150,24 +211,22 @@ class Neutral:
         check_number("speed", self.speed, lo=SPEED_RANGE[0], hi=SPEED_RANGE[1], lo_open=True)
         check_number("touch_N", self.touch_N, lo=FORCE_RANGE_N[0], hi=FORCE_RANGE_N[1],
                      why="N")
-        self._held = np.zeros(5, bool)
+        self._held: np.ndarray | None = None  # per world and digit: touched, held since
 
-    def __call__(self, obs: np.ndarray, info: dict) -> np.ndarray:
-        a = np.zeros(6)
-        if info["phase"] not in _GRIPPING:
-            self._held[:] = False
-            a[:5] = -1.0 if info["phase"] in _RELEASE else 0.0  # the thumb keeps its rotation
-            return a
-        forces = info[SIGNALS[self.signal]]
+    def _act(self, w: _Worlds) -> np.ndarray:
+        held = self._state("_held", (w.n, 5), False)
+        a = np.zeros((w.n, 6))
+        g = w.gripping
+        held[~g] = False
+        a[w.releasing, :5] = -1.0  # the thumb keeps its rotation
         for i, digit in enumerate(_DIGITS):
             # the thumb closes until its pad (Thumb2) touches: its proximal phalanx lies in the
             # partner's web space from the start and would stop it in the air over the back
-            keys = ("Thumb2",) if digit == "Thumb" else [k for k in forces if k.startswith(digit)]
-            touching = max(forces[k] for k in keys) > self.touch_N
-            self._held[i] |= touching
-            a[i] = 0.0 if self._held[i] else self.speed
+            force = w.digit(digit, ("Thumb2",) if digit == "Thumb" else None)
+            held[g, i] |= force[g] > self.touch_N
+            a[g, i] = np.where(held[g, i], 0.0, self.speed)
         # the thumb rotates towards the back of the partner's index metacarpal until it touches
-        a[5] = 0.0 if self._held[4] else _thumb_to_handshake(info)
+        a[g, 5] = np.where(held[g, 4], 0.0, _thumb_to_handshake(w)[g])
         return a
 
 
