@@ -108,3 +108,28 @@ def test_bad_vector_input_names_the_value():
         HandshakeVectorEnv(0)
     with pytest.raises(ValueError, match="2 mappings"):
         HandshakeVectorEnv(2, worlds=[{}])
+
+
+def test_worlds_with_equal_keywords_share_their_scene_and_match_single_envs():
+    """make_vec with one set of keywords builds the scene once; each world keeps its own plan,
+    sensors and random stream (60 steps: the reach and the start of the grip)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        vec = gym.make_vec("softhand/Handshake-v0", num_envs=2,
+                           vectorization_mode="vector_entry_point")
+        assert vec.envs[0].model is vec.envs[1].model
+        assert vec.envs[0].scenario is not vec.envs[1].scenario
+        singles = [HandshakeEnv() for _ in range(2)]
+        obs, _ = vec.reset(seed=11)  # world i: seed 11 + i, as Gymnasium's vector envs
+        ref = [e.reset(seed=11 + i)[0] for i, e in enumerate(singles)]
+        worst = np.abs(obs - np.array(ref)).max()
+        for _ in range(60):
+            a = np.full((2, 6), 0.5)
+            obs, reward, _, _, info = vec.step(a)
+            for w, e in enumerate(singles):
+                o1, r1, _, _, i1 = e.step(a[w])
+                f1 = np.array([i1["region_forces_N"][r] for r in e.region_names])
+                worst = max(worst, np.abs(obs[w] - o1).max(), abs(reward[w] - r1),
+                            np.abs(info["region_forces_N"][w] - f1).max())
+    vec.close()
+    assert worst <= TOL

@@ -74,6 +74,7 @@ class _Group:
         self.ctrl, self.act = b.bind("ctrl"), b.bind("act")
         self.mocap_pos, self.mocap_quat = b.bind("mocap_pos"), b.bind("mocap_quat")
         self.sensordata = b.bind("sensordata")
+        self.scratch = mujoco.MjData(models[0])  # get_data's target (a new MjData costs ~1 ms)
 
     def sensors(self, on: bool) -> None:
         """Sensors computed (on) or skipped by the next steps; they do not act on the dynamics."""
@@ -150,9 +151,10 @@ class BatchPhysics:
             np.put_along_axis(g.ctrl, np.asarray(index)[g.worlds], values[g.worlds], axis=1)
 
     def data(self, world: int) -> mujoco.MjData:
-        """World ``world``'s MjData after its last call (a copy: contacts, forces, sensors)."""
+        """World ``world``'s MjData after its last call: a copy (contacts, forces, sensors) into
+        its Batch's scratch MjData, which the next call of ``data`` on that Batch overwrites."""
         g = self.groups[self._group_of[world]]
-        return g.batch.get_data(int(self._local[world]))
+        return g.batch.get_data(int(self._local[world]), g.scratch)
 
     # --- episode -------------------------------------------------------------------------------
     def reset(self, worlds: Sequence[int], mount_pos: np.ndarray, mount_quat: np.ndarray,
@@ -203,7 +205,7 @@ class BatchPhysics:
                 reset = g.time[ids] < t + 0.5 * self._timestep[worlds]  # MuJoCo reset the data
                 for j, w in zip(ids[reset], worlds[reset], strict=True):
                     if live[w]:
-                        self.divergence[w] = diagnose(self.models[w], g.batch.get_data(int(j)),
+                        self.divergence[w] = diagnose(self.models[w], self.data(int(g.worlds[j])),
                                                       float(last_good[w]))
                         live[w] = False
         for g in self.groups:  # MuJoCo's warnings, and a non-finite state the last step made
@@ -214,7 +216,7 @@ class BatchPhysics:
             finite = np.array([math.isfinite(g.qpos[j].sum() + g.qvel[j].sum()) for j in ids])
             for j in ids[warned | ~finite]:
                 w = int(g.worlds[j])
-                self.divergence[w] = diagnose(self.models[w], g.batch.get_data(int(j)),
+                self.divergence[w] = diagnose(self.models[w], self.data(int(g.worlds[j])),
                                               float(g.time[j]))
         return list(self.divergence)
 

@@ -221,19 +221,26 @@ class PartnerScript:
         """One world's digit joint targets (:meth:`grips`)."""
         return self.grips(np.array([t], float), np.array([grip_force_N], float), dt)[0]
 
-    def mounts(self, t: np.ndarray) -> np.ndarray:
-        """Every world's mount position (m), shape (W, 3), at its time ``t`` (s, shape (W,))."""
-        e = self.ends
+    def mounts(self, t: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        """Every world's mount position (m), shape (W, 3), at its time ``t`` (s, shape (W,));
+        with ``rows``, the mount of world ``rows[k]`` at ``t[k]`` (k entries)."""
+        r = slice(None) if rows is None else rows
+        e, starts, contacts = self.ends[r], self.starts[r], self.contacts[r]
         t = np.asarray(t, float)
-        reach = self.starts + _min_jerk(t / self.reach_s)[:, None] * (self.contacts - self.starts)
-        held = self.contacts.copy()
+        reach = starts + _min_jerk(t / self.reach_s[r])[:, None] * (contacts - starts)
+        held = contacts.copy()
         ramp = np.minimum(1.0, np.minimum((t - e[:, 1]) / 0.1, (e[:, 2] - t) / 0.1))  # 0.1 s fades
         shaking = (e[:, 1] <= t) & (t < e[:, 2])
         held[:, 2] += np.where(shaking, ramp * SHAKE_AMPLITUDE_M * np.sin(
-            2 * np.pi * SHAKE_HZ * (t - e[:, 1]) + self.shake_phases), 0.0)
-        back = self.contacts + (_min_jerk((t - e[:, 3]) / self.return_s)[:, None]
-                                * (self.starts - self.contacts))
+            2 * np.pi * SHAKE_HZ * (t - e[:, 1]) + self.shake_phases[r]), 0.0)
+        back = contacts + (_min_jerk((t - e[:, 3]) / self.return_s[r])[:, None]
+                           * (starts - contacts))
         return np.where((t < e[:, 0])[:, None], reach, np.where((t < e[:, 3])[:, None], held, back))
+
+    def mount_path(self, times: np.ndarray, world: int = 0) -> np.ndarray:
+        """World ``world``'s mount positions (m) at ``times`` (s), shape (len(times), 3)."""
+        times = np.asarray(times, float)
+        return self.mounts(times, np.full(times.shape, world))
 
     def grips(self, t: np.ndarray, grip_force_N: np.ndarray, dt: float) -> np.ndarray:
         """Every world's digit joint targets (W, servos) at its time ``t`` (W,) from the summed

@@ -21,6 +21,9 @@ shake phase        uniform in [0, 2 pi)                                  -
 
 :func:`sample_partners` draws them from one seed (reproducible); :func:`run_partner` runs one
 handshake for one partner (a module-level function, so it runs in worker processes);
+:func:`run_population` runs many partners' handshakes together on the vector env (one world per
+partner, stepped by mujoco.batch, the controllers for all worlds at once) with the results of
+:func:`run_partner` for each (equal to 1e-9 N; tests/test_population.py);
 :func:`population_summary` gives per region the share of partners over 2 N and the distribution
 of the peak force, beside the paper's set.
 """
@@ -41,6 +44,7 @@ __all__ = [
     "Partner",
     "population_summary",
     "run_partner",
+    "run_population",
     "sample_partners",
 ]
 
@@ -142,6 +146,116 @@ def run_partner(partner: Partner, settings: dict) -> dict:
             "grip": run.grip_tracking(),
             "warnings": len(caught),
             "wall_s": time.perf_counter() - t0}
+
+
+def run_population(partners: list[Partner], settings: dict, *, nthread: int = 1
+                   ) -> tuple[list[dict], dict[int, str]]:
+    """The handshakes of ``partners`` on one vector env (softhand.envs.vector), one world each:
+    what :func:`run_partner` returns for each partner, in one batch. ``settings`` as for
+    run_partner; ``nthread``: threads of each mujoco.batch Batch (1, the default, in a worker
+    process of softhand.parallel, which holds one core; the cores this process may use, alone).
+
+    Each world is built as run_partner builds its env (its construction's warnings counted for
+    it), runs one episode (AutoresetMode.DISABLED: a world that ended stands still) and records
+    every env step as run_handshake does: forces, phase, the partner's grip, and the force
+    accounting of the world's contacts (ContactAreas on the world's MjData from the batch).
+    ``wall_s`` of each result is its share of the batch's wall time, building included.
+
+    Returns:
+        The results of the partners whose handshake ran to its end, in order, and per partner
+        index that diverged the :class:`~softhand.envs.physics.DivergenceError` text.
+    """
+    import time
+
+    from softhand.envs.controllers import make_controller
+    from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.physics import DivergenceError, mujoco_warnings_kept
+    from softhand.envs.run import ContactAreas, HandshakeRun, law_labels, pair_laws
+    from softhand.envs.vector import AutoresetMode, HandshakeVectorEnv
+
+    settings = dict(settings)
+    controller = settings.pop("controller", "neutral")
+    t0 = time.perf_counter()
+    envs, caught = [], []
+    for p in partners:
+        with warnings.catch_warnings(record=True) as built:  # counted per partner
+            warnings.simplefilter("always")
+            envs.append(HandshakeEnv(partner_size=(p.hand_length_mm, p.hand_width_mm),
+                                     randomize=False, **settings))
+        caught.append(list(built))
+    vec = HandshakeVectorEnv(envs=envs, nthread=nthread, autoreset_mode=AutoresetMode.DISABLED)
+    n = len(partners)
+    areas = []
+    for e in envs:
+        m = e.model
+        areas.append(ContactAreas(m, [m.geom(g).id for g in e.region_geoms], pair_laws(e),
+                                  [m.site(f"pro_touch_{r}").id for r in e.region_names]))
+    frames: list[dict[str, list]] = [{k: [] for k in ("t", "f", "s", "ph", "g", "a", "acc")}
+                                     for _ in range(n)]
+    ended = np.zeros(n, bool)
+    errors: dict[int, str] = {}
+    ctrl = make_controller(controller)
+    ending: list[list] = [[] for _ in range(n)]  # each world's warnings at its episode's end
+    with warnings.catch_warnings(record=True) as during:
+        warnings.simplefilter("always")
+        obs, info = vec.reset(seed=[p.seed for p in partners], options={
+            "grip_N": [p.grip_N for p in partners],
+            "duration_s": [p.duration_s for p in partners],
+            "shake_phase_rad": [p.shake_phase_rad for p in partners]})
+        while not ended.all():
+            del during[:]
+            with mujoco_warnings_kept():  # a divergence is reported below, not printed
+                obs, _, term, trunc, info = vec.step(ctrl.actions(obs, info, vec.region_names))
+            # a world whose episode ended with contacts beyond range warned once, in world order
+            warned = [w for w in np.flatnonzero((term | trunc) & ~ended)
+                      if info["beyond_range_summary"][w]["contact_steps"]
+                      or info["beyond_range_summary"][w]["bone_steps"]]
+            for w, record in zip(warned, list(during), strict=False):
+                ending[w].append(record)
+            now = vec.physics.time
+            for w in np.flatnonzero(~ended):
+                if term[w]:
+                    e = envs[w]
+                    errors[partners[w].index] = str(DivergenceError(
+                        vec.physics.divergence[w], skins=e.skins,
+                        representations=e.representations,
+                        timestep_s=float(e.model.opt.timestep)))
+                    continue
+                fr = frames[w]
+                fr["t"].append(float(now[w]))
+                fr["f"].append(info["region_forces_N"][w])
+                fr["s"].append(info["sensor_readings_N"][w])
+                fr["ph"].append(info["phase"][w])
+                fr["g"].append((info["partner_grip_measured_N"][w], info["partner_grip_N"][w]))
+                area, _, _ = areas[w](vec.physics.data(int(w)))
+                fr["a"].append(area)
+                fr["acc"].append(areas[w].accounting.copy())
+            ended |= term | trunc
+    share = (time.perf_counter() - t0) / n
+    results = []
+    for w, (p, e) in enumerate(zip(partners, envs, strict=True)):
+        for x in (*caught[w], *ending[w]):  # passed on, where they were raised
+            warnings.warn_explicit(x.message, x.category, x.filename, x.lineno)
+        if p.index in errors:
+            continue
+        fr = frames[w]
+        run = HandshakeRun(e.region_names, dict(e.skins), np.array(fr["t"]), np.zeros((0, 0)),
+                           np.zeros((0, 3)), np.zeros((0, 4)), np.array(fr["f"]), [],
+                           fr["ph"], share, 0, e.model, np.array(fr["a"]),
+                           accounting=np.array(fr["acc"]), sensor_reading_N=np.array(fr["s"]),
+                           partner_grip_N=np.array(fr["g"]), law_labels=tuple(law_labels(e)),
+                           contact_laws=e.contact_laws)
+        table = run.table()
+        results.append({"partner": p.to_dict(),
+                        "peak_N": {r: v["peak_N"] for r, v in table.items()},
+                        "mean_N": {r: v["mean_N"] for r, v in table.items()},
+                        "over_2N": run.over_2n,
+                        "force_accounting": run.force_accounting(),
+                        "grip": run.grip_tracking(),
+                        "warnings": len(caught[w]) + len(ending[w]),
+                        "wall_s": share})
+    vec.close()
+    return results, errors
 
 
 def population_summary(results: list[dict]) -> dict[str, dict]:

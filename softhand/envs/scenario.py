@@ -11,7 +11,8 @@ what makes one touch that touch:
                           hand's pre-shaped drives as (qpos address, act address, value)
 ``reset(env, rng, opts)`` each episode: the partner's plan (its mount's start pose, timing,
                           grip) from the episode's random stream and the reset options
-``mount(t)``              the partner's mount position at time t (m, world frame)
+``mount(t)``              the partner's mount position at time t (m, world frame);
+                          ``mount_path(times)`` at many (default: mount(t) for each)
 ``partner_targets(...)``  the partner's digit servo targets at time t, from what its digits
                           feel (once per action step)
 ``sensored_targets(t)``   the relaxed human sensored hand's drive targets (``hand="human"``)
@@ -72,6 +73,10 @@ class Scenario(abc.ABC):
     @abc.abstractmethod
     def mount(self, t: float) -> np.ndarray:
         """The partner's mount position at time ``t`` (m, world frame)."""
+
+    def mount_path(self, times: np.ndarray) -> np.ndarray:
+        """The mount's positions (m) at ``times`` (s), shape (len(times), 3)."""
+        return np.array([self.mount(t) for t in times])
 
     @abc.abstractmethod
     def partner_targets(self, t: float, feel_N: np.ndarray, dt: float) -> np.ndarray:

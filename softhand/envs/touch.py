@@ -51,6 +51,13 @@ ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
 MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
 
 
+def mount_path(scenario: Scenario, dt: float, frame_skip: int) -> np.ndarray:
+    """The partner's mount at every physics step of the planned episode (a scripted arm: no
+    feedback from the contacts), one action period past its end; shape (steps, 3)."""
+    n_steps = int(np.ceil(scenario.duration_s / dt)) + frame_skip
+    return scenario.mount_path(np.arange(n_steps) * dt)
+
+
 def default_frame_skip(timestep_s: float) -> int:
     """Physics steps per action by default: the most that fit in ``ACTION_PERIOD_S`` (at least 1).
 
@@ -216,8 +223,7 @@ class TwoHandTouchEnv(gym.Env):
         start, quat = self.scenario.reset(self, rng, options)
         dt = self.model.opt.timestep
         # the mount's path at every physics step (a scripted arm: no feedback from the contacts)
-        n_steps = int(np.ceil(self.scenario.duration_s / dt)) + self.frame_skip
-        self._mount = np.array([self.scenario.mount(k * dt) for k in range(n_steps)])
+        self._mount = mount_path(self.scenario, dt, self.frame_skip)
         self._step_index = 0
         self.physics.reset(start, quat, self._preset)
         self._forces = np.zeros(len(self.region_names))

@@ -35,16 +35,20 @@ worlds whose episode ended at this step ``beyond_range_summary`` (W,) (None else
 values as a single env's info, in arrays. Each number equals that of a single env with the
 world's keywords, seed and options (to 1e-9 N; tests/test_vector_env.py).
 
-Autoreset: ``AutoresetMode.SAME_STEP``: a world whose episode ended (truncated at its end, or
-terminated by a divergence, reward -100 and a zero observation as the single env) is reset within
-the same step, unseeded (its random stream continues, as a single env's reset without a seed);
-the step returns its first observation, and ``info["final_obs"]`` / ``info["final_info"]`` (with
-the masks ``_final_obs``, ``_final_info``) hold the ended episode's last observation and its
-world's info. A diverged world is reported in ``info["unstable"]`` and never stepped on.
+Autoreset (``autoreset_mode``): ``AutoresetMode.SAME_STEP`` (default): a world whose episode
+ended (truncated at its end, or terminated by a divergence, reward -100 and a zero observation as
+the single env) is reset within the same step, unseeded (its random stream continues, as a single
+env's reset without a seed); the step returns its first observation, and ``info["final_obs"]`` /
+``info["final_info"]`` (with the masks ``_final_obs``, ``_final_info``) hold the ended episode's
+last observation and its world's info. ``AutoresetMode.DISABLED``: a world whose episode ended
+stands still (reward 0, not stepped) until ``reset(options={"reset_mask": mask})`` starts it
+again (a population runs each partner's one episode so). A diverged world is reported in
+``info["unstable"]`` and never stepped on.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
@@ -57,9 +61,31 @@ from softhand.envs.batch import BatchPhysics
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.partner import PHASES, check_reset_options
 from softhand.envs.scenarios.handshake import HandshakeWorlds
+from softhand.envs.touch import mount_path
 from softhand.validate import show
 
 __all__ = ["HandshakeVectorEnv"]
+
+
+def _world_envs(kwargs: list[dict]) -> list[HandshakeEnv]:
+    """A single env per world; worlds with equal keywords share the first one's scene, laws and
+    calibration (read-only here) and get their own scenario, sensors, range counts and random
+    stream (what a world changes), instead of building the scene again (about 1.5 s each)."""
+    envs: list[HandshakeEnv] = []
+    built: dict[str, HandshakeEnv] = {}
+    for kw in kwargs:
+        key = repr(sorted(kw.items()))
+        if key not in built:
+            built[key] = HandshakeEnv(**kw)
+            envs.append(built[key])
+            continue
+        env = copy.copy(built[key])  # its physics is never stepped: sharing it is harmless
+        env.scenario = copy.deepcopy(env.scenario)
+        env.sensors = copy.deepcopy(env.sensors)
+        env._np_random, env._np_random_seed = None, None
+        env._reset_range_counts()
+        envs.append(env)
+    return envs
 
 
 def _world_seeds(seed, n: int) -> list[int | None]:
@@ -105,6 +131,9 @@ class HandshakeVectorEnv(VectorEnv):
         worlds: per world, a mapping of HandshakeEnv keywords over ``env_kwargs`` (length
             ``num_envs``; e.g. ``{"partner_size": (180, 85)}``, ``{"design": "solid-pu"}``).
         nthread: threads of each mujoco.batch Batch (default: the CPUs this process may use).
+        autoreset_mode: ``AutoresetMode.SAME_STEP`` or ``DISABLED`` (module docstring).
+        envs: the worlds as single envs built already (instead of ``num_envs``, ``worlds`` and
+            ``env_kwargs``): their scenes, laws and sensors; their own physics is not stepped.
         **env_kwargs: HandshakeEnv keywords of every world.
 
     Raises:
@@ -115,7 +144,13 @@ class HandshakeVectorEnv(VectorEnv):
     metadata: ClassVar[dict] = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, num_envs: int = 1, *, worlds: Sequence[Mapping[str, Any]] | None = None,
-                 nthread: int | None = None, **env_kwargs) -> None:
+                 nthread: int | None = None,
+                 autoreset_mode: AutoresetMode = AutoresetMode.SAME_STEP,
+                 envs: Sequence[HandshakeEnv] | None = None, **env_kwargs) -> None:
+        if envs is not None:  # worlds built already (e.g. each under its own warnings record)
+            if not envs or not all(isinstance(e, HandshakeEnv) for e in envs):
+                raise ValueError(f"envs = {show(envs)}: expected HandshakeEnv worlds")
+            num_envs = len(envs)
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) \
                 or num_envs < 1:
             raise ValueError(f"num_envs = {show(num_envs)}: expected an integer >= 1")
@@ -123,9 +158,14 @@ class HandshakeVectorEnv(VectorEnv):
         if worlds is not None and (isinstance(worlds, (str, Mapping)) or len(worlds) != n):
             raise ValueError(f"worlds = {show(worlds)}: expected {n} mappings of HandshakeEnv "
                              "keywords, one per world")
+        modes = (AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
+        if autoreset_mode not in modes:
+            raise ValueError(f"autoreset_mode = {show(autoreset_mode)}: allowed "
+                             f"{', '.join(str(m) for m in modes)}")
+        self.metadata = {**self.metadata, "autoreset_mode": autoreset_mode}
         #: each world's setup: a single env (checked arguments, scene, laws, sensors, grasp)
-        self.envs = [HandshakeEnv(**{**env_kwargs, **dict(w)})
-                     for w in (worlds or [{}] * n)]
+        self.envs = list(envs) if envs is not None else _world_envs(
+            [{**env_kwargs, **dict(w)} for w in (worlds or [{}] * n)])
         first = self.envs[0]
         for i, e in enumerate(self.envs):
             if e.frame_skip * e.model.opt.timestep != first.frame_skip * first.model.opt.timestep \
@@ -162,18 +202,29 @@ class HandshakeVectorEnv(VectorEnv):
         self._readings = np.zeros_like(self._forces)
         self._saturated = np.zeros(n, int)
         self._worlds: HandshakeWorlds | None = None
+        #: worlds whose episode ended and that wait for a reset (AutoresetMode.DISABLED)
+        self._ended = np.zeros(n, bool)
         self._closed = False
 
     # --- gymnasium API -------------------------------------------------------------------------
     def reset(self, *, seed=None, options: Mapping | None = None):
         """Start every world's episode; ``seed`` None, an integer (world i: seed + i) or one
         per world; ``options`` maps each reset option (HandshakeEnv.reset) to a number or one
-        per world. Returns (W, obs) and the info arrays."""
+        per world, and ``reset_mask`` (W,) to the worlds to reset (default all; Gymnasium's
+        convention, for AutoresetMode.DISABLED). Returns (W, obs) and the info arrays."""
         self._check_open()
         n = self.num_envs
+        options = dict(options or {})
+        mask = np.ones(n, bool)
+        if "reset_mask" in options:
+            mask = np.asarray(options.pop("reset_mask"))
+            if mask.shape != (n,) or mask.dtype != bool:
+                raise ValueError(f"options['reset_mask'] = {show(mask)}: expected {n} booleans")
         seeds = _world_seeds(seed, n)
         opts = _world_options(options, n)
-        self._reset_worlds(np.arange(n), seeds, opts)
+        ids = np.flatnonzero(mask)
+        self._reset_worlds(ids, [seeds[i] for i in ids], [opts[i] for i in ids])
+        self._ended[ids] = False
         return self._obs(), self._info(self._terms(np.zeros((n, 6))), np.zeros(n, bool))
 
     def step(self, actions):
@@ -198,13 +249,14 @@ class HandshakeVectorEnv(VectorEnv):
         for w in range(n):
             k, mount = self._step_index[w], self._mounts[w]
             paths[w] = mount[np.minimum(np.arange(k, k + self.frame_skip), len(mount) - 1)]
-        diverged = phys.advance(np.ones(n, bool), paths)
-        self._step_index += self.frame_skip
+        live = ~self._ended  # worlds waiting for a reset (AutoresetMode.DISABLED) stand still
+        diverged = phys.advance(live, paths)
+        self._step_index[live] += self.frame_skip
         unstable = np.array([d is not None for d in diverged])
         forces, bone = phys.region_forces()
         saturated = phys.saturated_sensors()
         now = phys.time
-        for w in np.flatnonzero(~unstable):  # a diverged world keeps its last good values
+        for w in np.flatnonzero(live & ~unstable):  # a diverged world keeps its last good values
             env = self.envs[w]
             self._forces[w], self._bone[w], self._saturated[w] = forces[w], bone[w], saturated[w]
             self._readings[w] = env.sensors.step(forces[w])
@@ -213,8 +265,8 @@ class HandshakeVectorEnv(VectorEnv):
         time_s = np.array([d.time_s if d is not None else now[w]
                            for w, d in enumerate(diverged)])
         terms = self._terms(a, time_s)
-        reward = np.where(unstable, -100.0, sum(terms.values()))
-        truncated = (now >= self._duration - 1e-9) & ~unstable
+        reward = np.where(unstable, -100.0, np.where(live, sum(terms.values()), 0.0))
+        truncated = (now >= self._duration - 1e-9) & ~unstable & live
         info = self._info(terms, unstable, time_s)
         info["unstable"] = np.array([str(d) if d is not None else False for d in diverged],
                                     dtype=object)
@@ -234,10 +286,13 @@ class HandshakeVectorEnv(VectorEnv):
             info["final_info"] = {k: v for k, v in info.items() if not k.startswith(("final",
                                                                                       "_final"))}
             info["_final_info"] = ended.copy()
-            ids = np.flatnonzero(ended)
-            self._reset_worlds(ids, [None] * ids.size, [{} for _ in ids])
-            fresh = self._obs()
-            obs[ended] = fresh[ended]
+            if self.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP:
+                ids = np.flatnonzero(ended)
+                self._reset_worlds(ids, [None] * ids.size, [{} for _ in ids])
+                fresh = self._obs()
+                obs[ended] = fresh[ended]
+            else:
+                self._ended |= ended
         return obs, reward, unstable, truncated, info
 
     def close(self, **kwargs) -> None:
@@ -263,8 +318,7 @@ class HandshakeVectorEnv(VectorEnv):
             rng = env.np_random
             start, quat = env.scenario.reset(env, rng, opts)
             dt = env.model.opt.timestep
-            n_steps = int(np.ceil(env.scenario.duration_s / dt)) + env.frame_skip
-            self._mounts[w] = np.array([env.scenario.mount(k * dt) for k in range(n_steps)])
+            self._mounts[w] = mount_path(env.scenario, dt, env.frame_skip)
             self._duration[w] = env.scenario.duration_s
             self._step_index[w] = 0
             env.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
