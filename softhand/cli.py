@@ -716,15 +716,31 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
 
         record_handshake(record, run.model, frames_of(run))
     summary = run.summary()
+    frame_skip = int(env.frame_skip)
+    summary["settings"] = {
+        "hand": hand, "design": design, "skins": dict(overrides or {}),
+        "representation": representation, "controller": controller,
+        "signal": signal if controller != "open-loop" else None, "target_N": target_N,
+        "seed": seed, "timestep_s": timestep_s, "physics_steps_per_env_step": frame_skip,
+        "env_step_s": frame_skip * timestep_s, "contact_laws": contact_laws,
+        "partner_size_mm": list(summary["episode"]["partner_size_mm"]),
+        "sensor_placement": list(placement_items) or None,
+        "softhand_version": __version__}
+    summary["env_steps_per_s"] = summary["steps_per_s"] / frame_skip
     if as_json:
         click.echo(json.dumps(summary, indent=1))
         return
     ep = summary["episode"]
-    what = ("the relaxed human hand (the paper's protocol)" if ep["hand"] == "human"
-            else f"the prosthetic hand, {controller} controller")
-    click.echo(f"handshake: {what}, seed {seed}, partner's hand {ep['partner_size_mm'][0]:g} x "
-               f"{ep['partner_size_mm'][1]:g} mm; partner's grip {summary['partner_grip']['measured_N']:.1f} N "
-               f"against {summary['partner_grip']['target_N']:.1f} N (95th percentile error "
+    designs = sorted(set(run.skins.values()))
+    skins_text = (f"{designs[0]} on every region" if len(designs) == 1
+                  else f"{len(designs)} skins ({', '.join(designs)})")
+    who = ("the relaxed human hand (the paper's protocol)" if ep["hand"] == "human"
+           else f"prosthetic hand, {skins_text}, controller {controller}")
+    click.echo(f"softhand {__version__} handshake | {who} | partner seed {seed}, hand "
+               f"{ep['partner_size_mm'][0]:g} x {ep['partner_size_mm'][1]:g} mm | timestep "
+               f"{timestep_s * 1e3:g} ms, an env step every {frame_skip * timestep_s * 1e3:g} ms")
+    click.echo(f"partner's grip {summary['partner_grip']['measured_N']:.1f} N against "
+               f"{summary['partner_grip']['target_N']:.1f} N (95th percentile error "
                f"{summary['partner_grip']['p95_error_pct']:.0f} %)\n")
     click.echo("| region | skin | peak N | mean N | peak area mm^2 | > 2 N | sensor | "
                "sensor peak N | sensor mean N |\n|---|---|---|---|---|---|---|---|---|")
@@ -745,20 +761,31 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                f"{max(chk['self_penetration_mm'].values()):.1f} mm; the partner's joints "
                f"{chk['partner_limit_margin_deg']:.1f} deg or more inside their ranges")
     cmp = summary["paper_over_2N"]
-    click.echo(f"\nover 2 N in both softhand and the paper (Fig. 4): {', '.join(cmp['both']) or '-'}")
-    click.echo(f"only in the paper: {', '.join(cmp['only_paper']) or '-'}; "
-               f"only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
+    click.echo("\nregions over 2 N, against the paper's Fig. 4 (30 subjects shaking a relaxed "
+               "human hand):")
+    click.echo(f"  in both: {', '.join(cmp['both']) or '-'}")
+    click.echo(f"  only in the paper: {', '.join(cmp['only_paper']) or '-'}")
+    click.echo(f"  only in softhand: {', '.join(cmp['only_softhand']) or '-'}")
+    click.echo("  " + ("the same protocol as the paper's: a difference is softhand's error"
+                       if ep["hand"] == "human" else
+                       "the paper measured a relaxed human hand, not a prosthetic hand with a "
+                       "controller, so differences are expected; --hand human runs its protocol"))
     acc = summary["force_accounting"]
     share = {k: 100 * acc[f"{k}_Ns"] / acc["total_Ns"] if acc["total_Ns"] else 0.0
              for k in ("skin_law", "tissue_law_only", "bone_on_bone", "no_law")}
-    click.echo(f"force between the hands {acc['total_Ns']:.1f} N s: through a calibrated skin law "
-               f"inside its range {acc['calibrated_share_pct']:.1f} %; skin law "
-               f"{share['skin_law']:.1f} %, tissue law only (rigid regions) "
-               f"{share['tissue_law_only']:.1f} %, bone on bone {share['bone_on_bone']:.1f} % "
-               f"(peak {acc['bone_on_bone_peak_N']:.1f} N), no law {share['no_law']:.1f} %; "
-               f"contacts beyond their law's calibrated range {acc['out_of_range_time_pct']:.1f} % "
-               f"of contact time; unsensed skin {acc['unsensed_share_pct']:.1f} % of the skin's "
-               "force")
+    beyond = max(share["skin_law"] - acc["calibrated_share_pct"], 0.0)
+    click.echo(f"\nwhere the force between the hands ({acc['total_Ns']:.1f} N s) went:\n"
+               "| through | share |\n|---|---|\n"
+               f"| a skin law, inside the force range it was calibrated over | "
+               f"{acc['calibrated_share_pct']:.1f} % |\n"
+               f"| a skin law, beyond that range (extrapolated) | {beyond:.1f} % |\n"
+               f"| the partner's tissue law only (rigid regions) | "
+               f"{share['tissue_law_only']:.1f} % |\n"
+               f"| bone on bone (peak {acc['bone_on_bone_peak_N']:.1f} N) | "
+               f"{share['bone_on_bone']:.1f} % |\n"
+               f"| no law | {share['no_law']:.1f} % |")
+    click.echo(f"skin force no embedded sensor sees: {acc['unsensed_share_pct']:.1f} %; "
+               f"contact time beyond a law's range: {acc['out_of_range_time_pct']:.1f} %")
     laws = ", ".join(f"{k} {v:.1f} %" for k, v in sorted(acc["by_law_share_pct"].items(),
                                                        key=lambda kv: -kv[1]))
     click.echo(f"skin pair force by law (--contact-laws {acc['contact_laws']}): {laws or '-'}")
@@ -776,7 +803,9 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                    f"{max(v['pad_error_pct'] for v in relax.values()):.1f} % (worst region), "
                    f"{worst[1]['pad_error_pct']:.1f} % ({worst[0]}); a memoryless soft contact at "
                    f"the same compression {worst[1]['soft_contact_error_pct']:.1f} %")
-    click.echo(f"{summary['steps_per_s']:.0f} steps/s, {summary['realtime_factor']:.1f}x real time"
+    click.echo(f"speed: {summary['env_steps_per_s']:.0f} env steps/s ("
+               f"{summary['steps_per_s']:.0f} physics steps/s, {frame_skip} per env step), "
+               f"{summary['realtime_factor']:.1f}x real time"
                + (f"; recording: {record}" if record else ""))
 
 

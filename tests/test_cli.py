@@ -174,6 +174,25 @@ def test_handshake_json_and_recording(tmp_path):
     assert set(data["over_2N"]) <= set(data["regions"])
     assert data["steps_per_s"] > 0 and data["realtime_factor"] > 0
     assert rrd.stat().st_size > 0
+    # the JSON says how it was made: seed, version and every setting
+    from softhand import __version__
+
+    cfg = data["settings"]
+    assert cfg["seed"] == 1 and cfg["softhand_version"] == __version__
+    assert cfg["timestep_s"] == 0.002 and cfg["physics_steps_per_env_step"] == 5
+    assert cfg["skins"] == {"Palm1": "rigid"} and cfg["controller"] == "neutral"
+    assert data["env_steps_per_s"] == pytest.approx(data["steps_per_s"] / 5)
+
+
+def test_handshake_text_starts_with_a_header_and_explains_fig4():
+    res = run(["handshake", "--seed", "2"])
+    assert res.exit_code == 0, res.output
+    first = res.stdout.splitlines()[0]
+    assert first.startswith("softhand ") and "seed 2" in first and "timestep 2 ms" in first
+    assert "controller neutral" in first and "pocket2-sil on every region" in first
+    assert "the paper measured a relaxed human hand" in res.stdout
+    assert "| a skin law, inside the force range it was calibrated over |" in res.stdout
+    assert "env steps/s (" in res.stdout
 
 
 @pytest.mark.parametrize("args, needle", [
