@@ -1009,7 +1009,9 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         k = int(np.argmin(np.abs(run.time_s - at_s)))
     view = CameraView(distance_m=distance, azimuth_deg=azimuth, elevation_deg=elevation)
     render_state(run.model, run.qpos[k], run.mocap_pos[k], run.mocap_quat[k], path,
-                 width=size[0], height=size[1], view=view)
+                 width=size[0], height=size[1], view=view,
+                 caption=f"orange: the prosthetic hand's skin; blue: the partner's hand; "
+                         f"t = {run.time_s[k]:.2f} s ({run.phase[k]})")
     click.echo(f"wrote {path} (t = {run.time_s[k]:.2f} s, {run.phase[k]})")
 
 

@@ -24,6 +24,10 @@ from softhand.io import atomic_open, check_writable_file
 __all__ = ["HAND_COLOURS", "SHEET_VIEWS", "CameraView", "SheetFrame", "render_sheet",
            "render_state"]
 
+#: Background of every picture (RGB, 0-255): light, so that pictures print and read in documents.
+BACKGROUND = (244, 244, 240)
+#: Colour of MuJoCo's contact-point markers in a picture (RGBA, 0-1): dark magenta on any skin.
+CONTACT_COLOUR = (0.75, 0.0, 0.55, 1.0)
 #: Colour of each hand's soft geoms in a picture (by name prefix): prosthetic skin, partner tissue.
 HAND_COLOURS = {"pro_skin_": (0.95, 0.62, 0.32, 0.85), "hum_tissue_": (0.25, 0.5, 0.9, 0.8)}
 
@@ -48,9 +52,10 @@ class CameraView:
 def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
                  mocap_quat: np.ndarray, path: str | os.PathLike, *, width: int = 960,
                  height: int = 720, view: CameraView | None = None,
-                 contacts: bool = True) -> Path:
+                 contacts: bool = True, caption: str | None = None) -> Path:
     """Render one state of the scene to a PNG at ``path`` (written atomically); return the path.
-    The two hands get HAND_COLOURS.
+    The two hands get HAND_COLOURS, on a light BACKGROUND; ``caption``: a line of text under the
+    picture (e.g. which hand is which and when).
 
     Raises:
         ValueError: a state that does not fit the model, a size outside [64, 4096] pixels or a
@@ -61,7 +66,7 @@ def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
     data = _state(model, qpos, mocap_pos, mocap_quat)
     pixels = _render(model, data, view or CameraView(), width, height, contacts,
                      _prefix_colours(model))
-    _save(target, pixels)
+    _save(target, pixels, caption)
     return target
 
 
@@ -125,7 +130,7 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
             ax.set_title(f"{frame.label}\n{title}", fontsize=9)
             ax.axis("off")
     fig.text(0.5, 0.005, "prosthetic skin by force: grey-blue < 2 N, orange-red > 2 N (red 5 N); "
-             "partner's tissue green; contact points white", ha="center", fontsize=8)
+             "partner's tissue green; contact points magenta", ha="center", fontsize=8)
     fig.tight_layout(rect=(0, 0.02, 1, 1))
     with atomic_open(target, "wb") as fh:
         fig.savefig(fh, format="png", dpi=100)
@@ -178,21 +183,46 @@ def _render(model: mujoco.MjModel, data: mujoco.MjData, view: CameraView, width:
     model.vis.scale.contactwidth = 0.05  # contact points as small discs (scaled by extent)
     model.vis.scale.contactheight = 0.01
     rgba = model.geom_rgba.copy()
+    point = model.vis.rgba.contactpoint.copy()
     for g, colour in colours.items():
         model.geom_rgba[g] = colour
+    model.vis.rgba.contactpoint[:] = CONTACT_COLOUR
     try:
         with mujoco.Renderer(model, height, width) as renderer:
             renderer.update_scene(data, camera=cam, scene_option=opt)
-            return renderer.render()
+            pixels = renderer.render()
+            renderer.enable_segmentation_rendering()
+            seg = renderer.render()
+            renderer.disable_segmentation_rendering()
     finally:
         model.geom_rgba[:] = rgba
+        model.vis.rgba.contactpoint[:] = point
+    # a light background: the pixels no object covers (segmentation id -1 and still the clear
+    # colour; contact markers are decorations without an id, so the colour test keeps them)
+    empty = (seg[..., 0] < 0) & (pixels.max(axis=-1) == 0)
+    pixels = pixels.copy()
+    pixels[empty] = BACKGROUND
+    return pixels
 
 
-def _save(target: Path, pixels: np.ndarray) -> None:
+def _save(target: Path, pixels: np.ndarray, caption: str | None = None) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    if caption is None:
+        with atomic_open(target, "wb") as fh:
+            plt.imsave(fh, pixels, format="png")
+        return
+    h, w = pixels.shape[:2]
+    band = 36  # pixels of caption under the picture
+    fig = plt.figure(figsize=(w / 100, (h + band) / 100), dpi=100)
+    fig.patch.set_facecolor(np.asarray(BACKGROUND) / 255)
+    ax = fig.add_axes((0, band / (h + band), 1, h / (h + band)))
+    ax.imshow(pixels)
+    ax.axis("off")
+    fig.text(0.5, 0.5 * band / (h + band), caption, ha="center", va="center", fontsize=11)
     with atomic_open(target, "wb") as fh:
-        plt.imsave(fh, pixels, format="png")
+        fig.savefig(fh, format="png", dpi=100, facecolor=fig.get_facecolor())
+    plt.close(fig)
