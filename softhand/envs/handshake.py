@@ -212,7 +212,9 @@ class HandshakeEnv(TwoHandTouchEnv):
             :meth:`step` or :meth:`reset` after :meth:`close`.
 
     Physics: every MuJoCo call of an episode goes through :attr:`physics`
-    (:class:`~softhand.envs.physics.MujocoPhysics`), the seam a batched backend would implement.
+    (:class:`~softhand.envs.physics.MujocoPhysics`), the seam the batched backend implements
+    (:class:`~softhand.envs.batch.BatchPhysics`, for ``gymnasium.make_vec(...,
+    vectorization_mode="vector_entry_point")``: :class:`~softhand.envs.vector.HandshakeVectorEnv`).
     Structure: this is the generic :class:`~softhand.envs.touch.TwoHandTouchEnv` with the
     handshake scenario (:attr:`scenario`, :class:`~softhand.envs.scenarios.HandshakeScenario`:
     the partner's script, the phases, the reward); another touch is another scenario.

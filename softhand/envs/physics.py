@@ -18,9 +18,13 @@ touches MuJoCo's state during an episode goes through :class:`MujocoPhysics`:
 ``qpos``, ``qvel``, ``time``   the state
 ============================== =====================================================================
 
-A batched backend (MuJoCo Warp or MJX: many worlds stepped at once on an accelerator) implements
-the same methods over arrays with a leading world axis; the env's script and reward are per world
-and stay on the host. Timings of the handshake are of this class's ``advance``.
+:class:`softhand.envs.batch.BatchPhysics` implements the same methods over arrays with a leading
+world axis (``mujoco.batch``: W worlds on threads), for the vector env (softhand.envs.vector); the
+partner's script, the controllers and the reward run over those arrays
+(:class:`~softhand.envs.scenarios.handshake.HandshakeWorlds`), the single env being one world.
+Both backends read the sensors (:class:`SensorLayout`), diagnose a divergence (:func:`diagnose`)
+and check the contacts' ranges (:func:`contacts_above`) with the same functions. Timings of the
+handshake are of this class's ``advance``.
 """
 
 from __future__ import annotations

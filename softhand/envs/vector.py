@@ -220,12 +220,14 @@ class HandshakeVectorEnv(VectorEnv):
             mask = np.asarray(options.pop("reset_mask"))
             if mask.shape != (n,) or mask.dtype != bool:
                 raise ValueError(f"options['reset_mask'] = {show(mask)}: expected {n} booleans")
+            if self._worlds is None and not mask.all():
+                raise ValueError("options['reset_mask']: the first reset() starts every world")
         seeds = _world_seeds(seed, n)
         opts = _world_options(options, n)
         ids = np.flatnonzero(mask)
         self._reset_worlds(ids, [seeds[i] for i in ids], [opts[i] for i in ids])
         self._ended[ids] = False
-        return self._obs(), self._info(self._terms(np.zeros((n, 6))), np.zeros(n, bool))
+        return self._obs(), self._info(self._terms(np.zeros((n, 6))))
 
     def step(self, actions):
         """One action period of every world (module docstring)."""
@@ -267,7 +269,7 @@ class HandshakeVectorEnv(VectorEnv):
         terms = self._terms(a, time_s)
         reward = np.where(unstable, -100.0, np.where(live, sum(terms.values()), 0.0))
         truncated = (now >= self._duration - 1e-9) & ~unstable & live
-        info = self._info(terms, unstable, time_s)
+        info = self._info(terms, time_s)
         info["unstable"] = np.array([str(d) if d is not None else False for d in diverged],
                                     dtype=object)
         obs = self._obs()
@@ -355,7 +357,7 @@ class HandshakeVectorEnv(VectorEnv):
         obs[:, -1] = self.physics.time / self._duration
         return obs
 
-    def _info(self, terms: dict[str, np.ndarray], unstable: np.ndarray,
+    def _info(self, terms: dict[str, np.ndarray],
               time_s: np.ndarray | None = None) -> dict[str, Any]:
         estimate = np.array([e.sensors.bank.load_estimate(r)
                              for e, r in zip(self.envs, self._readings, strict=True)])
@@ -378,5 +380,4 @@ class HandshakeVectorEnv(VectorEnv):
                 "partner_effort_rad": script.efforts.copy(),
                 "grasp_thumb_rotation_rad": np.array([e.scenario.thumb_rotation_rad
                                                       for e in self.envs]),
-                "unstable": np.zeros(self.num_envs, dtype=object) if not unstable.any()
-                else unstable}
+                "unstable": np.full(self.num_envs, False, dtype=object)}
