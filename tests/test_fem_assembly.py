@@ -110,10 +110,10 @@ def test_contact_tangent_and_force_are_consistent():
     assert np.allclose(pocket.g0, 2.0, atol=1e-3)  # pocket height (quadratic geometry)
     v = np.random.default_rng(2).standard_normal(mesh.n_dofs) * 1e-9
     for gs, shift in ((plate, -0.5), (pocket, -2.05)):
-        r0, K, n_closed = gs.add(u, 1000.0, shift)
-        r1, _, _ = gs.add(u + v, 1000.0, shift)
+        r0, kw, n_closed = gs.penalty_forces(u, 1000.0, shift)
+        r1, _, _ = gs.penalty_forces(u + v, 1000.0, shift)
         assert n_closed > 0
-        assert np.allclose(r1 - r0, K @ v, rtol=1e-6, atol=1e-12)
-    r, _, _ = plate.add(u, 1000.0, -0.5)
+        assert np.allclose(r1 - r0, gs.stiffness(kw) @ v, rtol=1e-6, atol=1e-12)
+    r, _, _ = plate.penalty_forces(u, 1000.0, -0.5)
     assert plate.force(u, 1000.0, -0.5) == pytest.approx(r[1::2].sum(), rel=1e-12)
     assert gaps.min() > 0.0

@@ -95,13 +95,14 @@ class Assembler:
         self.n_qp = ref.weights.size
         #: (free dofs, their block's pattern) of the last :meth:`_free_pattern` call
         self._free_cache: tuple[np.ndarray, tuple] | None = None
-        #: the scatter in the compiled tangent's entry order (n, i, j, m) per element
-        nd_ = nn * dim
-        self._scatter_nijm = (self._scatter.reshape(ne, nn, dim, nn, dim)
-                              .transpose(0, 1, 2, 4, 3).reshape(ne, nd_ * nd_))
-        #: the shape-function gradients as (element, (q, d), m) for the compiled tangent
-        self._G_qdm = np.ascontiguousarray(
-            self.dNdX.transpose(0, 1, 3, 2).reshape(ne, self.n_qp * dim, nn))
+        if engine == "compiled":
+            nd_ = nn * dim
+            #: the scatter in the compiled tangent's entry order (n, i, j, m) per element
+            self._scatter_nijm = (self._scatter.reshape(ne, nn, dim, nn, dim)
+                                  .transpose(0, 1, 2, 4, 3).reshape(ne, nd_ * nd_))
+            #: the shape-function gradients as (element, (q, d), m) for the compiled tangent
+            self._G_qdm = np.ascontiguousarray(
+                self.dNdX.transpose(0, 1, 3, 2).reshape(ne, self.n_qp * dim, nn))
 
     def close(self) -> None:
         """Stop the element threads (the assembler stays usable, single-threaded)."""
@@ -189,13 +190,18 @@ class Assembler:
         f = np.bincount(self.edofs.ravel(), weights=fe.ravel(), minlength=mesh.n_dofs)
         return f, lambda free=None: self._tangent(F, D, S, free), ElementState(new_groups)
 
-    def _evaluate_compiled(self, u: np.ndarray, state: ElementState, dt: float):
-        """:meth:`evaluate` on the compiled kernels (:mod:`softhand.fem.kernels`)."""
+    def _kernels(self):
+        """The compiled kernels' module, its numba threads set to this assembler's."""
         import numba
 
         from softhand.fem import kernels
 
         numba.set_num_threads(min(self.threads, numba.config.NUMBA_NUM_THREADS))
+        return kernels
+
+    def _evaluate_compiled(self, u: np.ndarray, state: ElementState, dt: float):
+        """:meth:`evaluate` on the compiled kernels (:mod:`softhand.fem.kernels`)."""
+        kernels = self._kernels()
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
         nq = self.n_qp
@@ -248,11 +254,7 @@ class Assembler:
                           free: np.ndarray | None = None, raw: bool = False):
         """:meth:`_tangent` from the compiled element tangents (:func:`kernels.element_tangents`);
         ``raw``: the data of the whole pattern (:meth:`pattern`) instead of a matrix."""
-        import numba
-
-        from softhand.fem import kernels
-
-        numba.set_num_threads(min(self.threads, numba.config.NUMBA_NUM_THREADS))
+        kernels = self._kernels()
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
         K = np.empty((ne, nn * dim * dim, nn))

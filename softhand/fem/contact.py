@@ -84,11 +84,6 @@ class GapSet:
         """The tangent ``G^T diag(kw) G`` for the point stiffnesses of :meth:`penalty_forces`."""
         return self.G.T @ sp.diags(kw) @ self.G
 
-    def add(self, u: np.ndarray, penalty: float, shift: float = 0.0):
-        """Residual vector and tangent matrix contributions, and the number of closed points."""
-        r, kw, n = self.penalty_forces(u, penalty, shift)
-        return r, self.stiffness(kw), n
-
 
 def _face_geometry(mesh: Mesh, faces: np.ndarray, n_gauss: int):
     """Shape values, positions, unit normals and area weights at face Gauss points."""
