@@ -93,3 +93,50 @@ def test_grasp_holds_at_the_corners_of_the_subjects_sizes(dl, dw):
                                                                hand_width_m=width)))
     m = _check(config)
     assert math.isfinite(m["partner_limit_margin_deg"])
+
+
+def test_pruned_residual_and_jacobian_equal_measuring_every_pair():
+    """The grasp's residual measures only the pairs whose bounding spheres can reach the
+    residual's threshold, and each Jacobian column only the pairs its step moved; both must give
+    the same floating-point numbers as measuring every pair (what the solver did before), at
+    states near and far from the grasp."""
+    from mujoco import minimize
+
+    from softhand.hands.grasp import _FD_EPS, _Problem
+
+    problem = _Problem(SceneConfig(), GRASP_SETTINGS)
+    m, d, s = problem.m, problem.d, problem.s
+    ft = np.zeros(6)
+
+    def every(pairs, cap):
+        return np.array([mujoco.mj_geomDistance(m, d, int(a), int(b), cap, ft) for a, b in pairs])
+
+    rng = np.random.default_rng(7)
+    bounds = problem.bounds
+    checked = 0
+    for k in range(12):
+        x = np.clip(problem.prior + rng.normal(0.0, 0.2 if k % 2 else 0.03, problem.n), *bounds)
+        problem.set_state(x)
+        for pairs, cap, above in ((problem.soft_pairs, 0.01, -s.max_depth_m),
+                                  (problem.bone_pairs, 0.02, s.bone_clearance_m),
+                                  (problem.self_pairs, 0.01, 0.0)):
+            full = every(pairs, cap)
+            # the bound holds for every pair, and the pruned distances agree where they matter
+            lower = problem.lower_bounds(pairs)
+            assert np.all((lower <= full + 1e-12) | (full >= cap))
+            pruned = problem.distances(pairs, cap, above)
+            near = full < above
+            assert np.array_equal(pruned[near], full[near])
+            assert np.all(pruned[~near] >= above)
+            checked += int(near.sum())
+        for mine, others in problem.gap_sets:
+            expect = [min(every([(g, o) for o in others], 0.05)) for g in mine]
+            assert problem.nearest(mine, others) == expect
+        for contacts in (False, True):
+            r = problem.residual(x, contacts=contacts)[:, None]
+            fun = lambda xh, c=contacts: np.stack(  # noqa: E731
+                [problem.residual(xh[:, j], contacts=c) for j in range(xh.shape[1])], axis=1)
+            expect, _ = minimize.jacobian_fd(fun, x[:, None], r, _FD_EPS, 0,
+                                             [b.reshape(-1, 1) for b in bounds])
+            assert np.array_equal(problem.jacobian(x[:, None], r, contacts), expect)
+    assert checked > 50  # the states include overlapping pairs (measured 1,000 and more)

@@ -43,6 +43,13 @@ Variables: the partner hand frame's pose relative to the prosthetic hand frame (
 rotation vector about the starting orientation), the partner's 16 digit joints (wrist at 0), the
 prosthetic's 6 motors (coupled joints follow their equalities). Solved with
 ``mujoco.minimize.least_squares`` (box bounds, finite differences). Cached per SceneConfig.
+
+Cost: nearly all the time is geom distances inside finite differences. Two shortcuts that leave
+every floating-point number as it was (tests/test_grasp.py measures every pair against them): a
+pair is measured only where its bounding spheres can reach the residual's threshold (a convex
+overlap is at most as deep as its spheres'; the other pairs' terms are exactly zero), and a
+Jacobian column, whose step turns one joint or moves the partner, measures only the pairs with a
+geom that moved (the others keep the distance they have at the column's base point).
 """
 
 from __future__ import annotations
@@ -105,6 +112,11 @@ GRASP_SETTINGS = GraspSettings()
 #: the posture prior's pull); above it the solver tries the next start (local minima were 1.6e-2
 #: and 2.3e-2: a partner finger between the palms).
 GOOD_COST_M2 = 1e-3
+#: Slack of the bounding-sphere pruning (m): a pair is measured unless its spheres' gap exceeds
+#: the threshold by this much, so that no rounding in the distance routine changes a residual.
+_PRUNE_M = 1e-6
+#: Finite-difference step of the grasp's Jacobian (relative, as mujoco.minimize scales it).
+_FD_EPS = 1e-5
 
 
 @dataclass(frozen=True)
@@ -175,12 +187,22 @@ class _Problem:
                                   for j in PROSTHETIC_MOTOR_JOINTS])
         self.pro_palm_body = m.body("pro_palm").id
         self.hum_palm_body = m.body("hum_palm").id
+        self.couplings = _couplings(m)
+        self.pads = {(prefix, digit): _pad_frame(m, prefix, digit, layout)
+                     for prefix, layout in (("pro_", self.pro), ("hum_", self.hum))
+                     for digit in ("thumb", *const.FINGERS)}
+        self.web_pro, self.web_hum = web_point(self.pro), web_point(self.hum)
+        self.dorsal_pro, self.dorsal_hum = _dorsal_index(self.pro), _dorsal_index(self.hum)
         # self-contact pairs: thumb pieces x finger phalanges, neighbouring fingers
-        self.self_pairs = _self_pairs(m, "pro_skin_", _PRO_PIECES) + _self_pairs(
-            m, "hum_tissue_", _HUM_PIECES)
+        self.self_pairs = np.array(_self_pairs(m, "pro_skin_", _PRO_PIECES) + _self_pairs(
+            m, "hum_tissue_", _HUM_PIECES))
+        self.soft_pairs = np.array([(a, b) for a in self.pro_soft for b in self.hum_soft])
+        self.bone_pairs = np.array([(a, b) for a in self.pro_bone for b in self.hum_bone])
         # phalanx pieces of each hand (contact-gap residuals) and fingertip bodies
         self.pro_phalanges = [gid(f"pro_skin_{r}") for r in _PRO_PHALANGES]
         self.hum_phalanges = [gid(f"hum_tissue_{p}") for p in _HUM_PHALANGES]
+        self.gap_sets = ((self.pro_phalanges, np.array(self.hum_soft)),
+                         (self.hum_phalanges, np.array(self.pro_soft)))
         self.dist = np.zeros(6)
         n_hum, n_pro = len(PARTNER_JOINTS), len(PROSTHETIC_MOTOR_JOINTS)
         margin = math.radians(settings.limit_margin_deg)
@@ -204,6 +226,10 @@ class _Problem:
             [0.7, 0.7, 0.7, 0.7, 0.4, 0.3]])
         self.prior = np.clip(self.prior, *self.bounds)
         self.n = 6 + n_hum + n_pro
+        # the reference state of jacobian(), which geoms moved from it, the distances measured
+        self._ref: tuple[np.ndarray, np.ndarray] | None = None
+        self._moved: np.ndarray | None = None
+        self._known: dict = {}
 
     def starts(self):
         """Starting points: the relaxed prior at the configured crossing, then the partner turned
@@ -230,11 +256,89 @@ class _Problem:
         d.qpos[self.arm_qpos + 3:self.arm_qpos + 7] = quat
         d.qpos[self.hum_qpos] = x[6:6 + len(self.hum_qpos)]
         d.qpos[self.pro_qpos] = x[6 + len(self.hum_qpos):]
-        _couple(m, d)
+        _couple(m, d, self.couplings)
         mujoco.mj_kinematics(m, d)
+        if self._ref is not None:  # inside jacobian(): which geoms this state moved
+            xpos, xmat = self._ref
+            self._moved = (d.geom_xpos != xpos).any(axis=1) | (d.geom_xmat != xmat).any(axis=1)
 
     def distance(self, g1: int, g2: int, cap: float = 0.05) -> float:
-        return mujoco.mj_geomDistance(self.m, self.d, g1, g2, cap, self.dist)
+        """The pair's signed distance capped at ``cap`` (m). Inside :meth:`jacobian` a pair
+        whose two geoms have not moved from the reference state is measured once."""
+        if self._moved is None or self._moved[g1] or self._moved[g2]:
+            return mujoco.mj_geomDistance(self.m, self.d, g1, g2, cap, self.dist)
+        key = (g1, g2, cap)
+        value = self._known.get(key)
+        if value is None:
+            value = self._known[key] = mujoco.mj_geomDistance(self.m, self.d, g1, g2, cap,
+                                                              self.dist)
+        return value
+
+    def jacobian(self, x: np.ndarray, r: np.ndarray, contacts: bool) -> np.ndarray:
+        """mujoco.minimize's finite-difference Jacobian at ``x`` (the same steps and columns),
+        with each column measuring only the pairs that its step moved: a step of one joint moves
+        one digit, and a pair with neither geom moved has the distance it has at ``x`` (the
+        same floating-point result: forward kinematics of unchanged joints is unchanged)."""
+        self.set_state(np.ravel(x))
+        self._ref = (self.d.geom_xpos.copy(), self.d.geom_xmat.copy())
+        self._known = {}
+        try:
+            jac, _ = minimize.jacobian_fd(
+                lambda xh: np.stack([self.residual(xh[:, k], contacts=contacts)
+                                     for k in range(xh.shape[1])], axis=1),
+                x, r, _FD_EPS, 0, [b.reshape(-1, 1) for b in self.bounds])
+        finally:
+            self._ref, self._moved, self._known = None, None, {}
+        return jac
+
+    def lower_bounds(self, pairs: np.ndarray) -> np.ndarray:
+        """A lower bound of each pair's signed distance: the gap of the geoms' bounding spheres
+        (a convex overlap is at most as deep as its bounding spheres')."""
+        xpos, rbound = self.d.geom_xpos, self.m.geom_rbound
+        a, b = pairs[:, 0], pairs[:, 1]
+        return (np.linalg.norm(xpos[a] - xpos[b], axis=1) - rbound[a] - rbound[b])
+
+    def distances(self, pairs: np.ndarray, cap: float, above: float) -> np.ndarray:
+        """Each pair's distance (capped at ``cap``) where it can be under ``above``; ``cap`` for
+        the pairs whose bounding spheres are ``above`` + _PRUNE_M apart or more (their residual
+        terms are exactly zero either way: the same residuals as measuring every pair)."""
+        out = np.full(len(pairs), cap)
+        candidates = self.lower_bounds(pairs) < above + _PRUNE_M
+        if self._moved is None:
+            for i in np.flatnonzero(candidates):
+                out[i] = mujoco.mj_geomDistance(self.m, self.d, int(pairs[i, 0]),
+                                                int(pairs[i, 1]), cap, self.dist)
+            return out
+        # inside jacobian(): pairs that did not move keep their measured distance
+        known = self._known.setdefault((id(pairs), cap), np.full(len(pairs), np.nan))
+        fixed = ~(self._moved[pairs[:, 0]] | self._moved[pairs[:, 1]])
+        reuse = candidates & fixed & ~np.isnan(known)
+        out[reuse] = known[reuse]
+        for i in np.flatnonzero(candidates & ~reuse):
+            out[i] = mujoco.mj_geomDistance(self.m, self.d, int(pairs[i, 0]), int(pairs[i, 1]),
+                                            cap, self.dist)
+            if fixed[i]:
+                known[i] = out[i]
+        return out
+
+    def nearest(self, mine: list[int], others: np.ndarray, cap: float = 0.05) -> list[float]:
+        """Per geom of ``mine``, the smallest capped distance to ``others``: pairs in the order of
+        their bounding spheres' gap, stopping where that gap passes the nearest distance found
+        (the same minimum as measuring every pair)."""
+        xpos, rbound = self.d.geom_xpos, self.m.geom_rbound
+        bounds = (np.linalg.norm(xpos[mine][:, None] - xpos[others][None], axis=2)
+                  - rbound[mine][:, None] - rbound[others][None])
+        order = np.argsort(bounds, axis=1, kind="stable").tolist()
+        bounds, others = bounds.tolist(), others.tolist()
+        out = []
+        for k, g in enumerate(mine):
+            best, row = cap, bounds[k]
+            for i in order[k]:
+                if row[i] >= best + _PRUNE_M:
+                    break
+                best = min(best, self.distance(g, others[i], cap))
+            out.append(best)
+        return out
 
     def hand_point(self, body: int, local: np.ndarray) -> np.ndarray:
         return self.d.xpos[body] + self.d.xmat[body].reshape(3, 3) @ local
@@ -242,8 +346,10 @@ class _Problem:
     def in_frame(self, body: int, point: np.ndarray) -> np.ndarray:
         return _in_frame(self.d, body, point)
 
-    def pad(self, prefix: str, digit: str, layout: HandLayout) -> np.ndarray:
-        return _pad(self.m, self.d, prefix, digit, layout)
+    def pad(self, prefix: str, digit: str) -> np.ndarray:
+        """World position of a digit's pad (as :func:`_pad`)."""
+        body, local = self.pads[prefix, digit]
+        return self.hand_point(body, local)
 
     # --- residuals -----------------------------------------------------------------------------
     def residual(self, x: np.ndarray, *, contacts: bool) -> np.ndarray:
@@ -256,36 +362,30 @@ class _Problem:
         z_hum = d.xmat[self.hum_palm_body].reshape(3, 3)[:, 2]
         r += list(0.02 * (z_pro + z_hum))
         # web spaces: together in the plane of the prosthetic palm
-        w_pro = self.hand_point(self.pro_palm_body, web_point(self.pro))
-        w_hum = self.hand_point(self.hum_palm_body, web_point(self.hum))
+        w_pro = self.hand_point(self.pro_palm_body, self.web_pro)
+        w_hum = self.hand_point(self.hum_palm_body, self.web_hum)
         r += list(self.in_frame(self.pro_palm_body, w_hum + d.xpos[self.pro_palm_body]
                                 - w_pro)[:2])
         # thumbs over the back of the other hand's index metacarpal
-        r += list(0.5 * (self.pad("hum_", "thumb", self.hum)
-                         - self.hand_point(self.pro_palm_body, _dorsal_index(self.pro))))
-        r += list(0.5 * (self.pad("pro_", "thumb", self.pro)
-                         - self.hand_point(self.hum_palm_body, _dorsal_index(self.hum))))
+        r += list(0.5 * (self.pad("hum_", "thumb")
+                         - self.hand_point(self.pro_palm_body, self.dorsal_pro)))
+        r += list(0.5 * (self.pad("pro_", "thumb")
+                         - self.hand_point(self.hum_palm_body, self.dorsal_hum)))
         # fingertips past the other hand's mid-plane, onto its back (one-sided)
         for f in const.FINGERS:
-            z = self.in_frame(self.pro_palm_body, self.pad("hum_", f, self.hum))[2]
+            z = self.in_frame(self.pro_palm_body, self.pad("hum_", f))[2]
             r.append(0.2 * max(0.0, -z))
-            z = self.in_frame(self.hum_palm_body, self.pad("pro_", f, self.pro))[2]
+            z = self.in_frame(self.hum_palm_body, self.pad("pro_", f))[2]
             r.append(0.2 * max(0.0, -z))
         # every phalanx touches the other hand (gap beyond the press is penalised)
-        for mine, other in ((self.pro_phalanges, self.hum_soft),
-                            (self.hum_phalanges, self.pro_soft)):
-            for g in mine:
-                gap = min(self.distance(g, o) for o in other)
-                r.append(0.3 * max(0.0, gap + s.press_m))
+        for mine, others in self.gap_sets:
+            r += [0.3 * max(0.0, gap + s.press_m) for gap in self.nearest(mine, others)]
         if contacts:
-            for a in self.pro_soft:
-                for b in self.hum_soft:
-                    r.append(10.0 * max(0.0, -self.distance(a, b, 0.01) - s.max_depth_m))
-            for a in self.pro_bone:
-                for b in self.hum_bone:
-                    r.append(10.0 * max(0.0, s.bone_clearance_m - self.distance(a, b, 0.02)))
-            for a, b in self.self_pairs:
-                r.append(3.0 * max(0.0, -self.distance(a, b, 0.01)))
+            r += list(10.0 * np.maximum(0.0, -self.distances(
+                self.soft_pairs, 0.01, -s.max_depth_m) - s.max_depth_m))
+            r += list(10.0 * np.maximum(0.0, s.bone_clearance_m - self.distances(
+                self.bone_pairs, 0.02, s.bone_clearance_m)))
+            r += list(3.0 * np.maximum(0.0, -self.distances(self.self_pairs, 0.01, 0.0)))
         r += list(0.01 * (x[6:] - self.prior[6:]))
         r += list(0.005 * x[3:6])
         return np.asarray(r)
@@ -346,8 +446,9 @@ def _solve(problem: _Problem, x0: np.ndarray, contacts: bool, max_iter: int):
         return np.stack([problem.residual(x[:, k], contacts=contacts)
                          for k in range(x.shape[1])], axis=1)
 
-    return minimize.least_squares(x0, fun, bounds=problem.bounds, eps=1e-5, max_iter=max_iter,
-                                  verbose=0, xtol=1e-6)
+    return minimize.least_squares(
+        x0, fun, bounds=problem.bounds, jacobian=lambda x, r: problem.jacobian(x, r, contacts),
+        eps=_FD_EPS, max_iter=max_iter, verbose=0, xtol=1e-6)
 
 
 @functools.lru_cache(maxsize=64)
@@ -407,14 +508,22 @@ def set_grasp_state(model: mujoco.MjModel, data: mujoco.MjData, grasp: Grasp, *,
     mujoco.mj_kinematics(model, data)
 
 
-def _couple(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+def _couple(model: mujoco.MjModel, data: mujoco.MjData,
+            couplings: list[tuple[int, int, float, float]] | None = None) -> None:
     """Set every joint coupled by a joint equality (q1 = c0 + c1 q2, the prosthetic's couplings)
-    from its driver in ``data.qpos``."""
-    for e in range(model.neq):
-        if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT:
-            a1 = model.jnt_qposadr[model.eq_obj1id[e]]
-            a2 = model.jnt_qposadr[model.eq_obj2id[e]]
-            data.qpos[a1] = model.eq_data[e, 0] + model.eq_data[e, 1] * data.qpos[a2]
+    from its driver in ``data.qpos``, in the equalities' order (a coupled joint may drive
+    another); ``couplings``: :func:`_couplings` of the model, when known."""
+    qpos = data.qpos
+    for a1, a2, c0, c1 in _couplings(model) if couplings is None else couplings:
+        qpos[a1] = c0 + c1 * qpos[a2]
+
+
+def _couplings(model: mujoco.MjModel) -> list[tuple[int, int, float, float]]:
+    """The model's joint equalities as (qpos address of q1, of q2, c0, c1), in order."""
+    return [(int(model.jnt_qposadr[model.eq_obj1id[e]]),
+             int(model.jnt_qposadr[model.eq_obj2id[e]]),
+             float(model.eq_data[e, 0]), float(model.eq_data[e, 1]))
+            for e in range(model.neq) if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT]
 
 
 def _in_frame(data: mujoco.MjData, body: int, point: np.ndarray) -> np.ndarray:
@@ -425,9 +534,15 @@ def _in_frame(data: mujoco.MjData, body: int, point: np.ndarray) -> np.ndarray:
 def _pad(model: mujoco.MjModel, data: mujoco.MjData, prefix: str, digit: str,
          layout: HandLayout) -> np.ndarray:
     """World position of the pad (palmar surface, mid-length) of a digit's distal phalanx."""
+    body, local = _pad_frame(model, prefix, digit, layout)
+    return data.xpos[body] + data.xmat[body].reshape(3, 3) @ local
+
+
+def _pad_frame(model: mujoco.MjModel, prefix: str, digit: str,
+               layout: HandLayout) -> tuple[int, np.ndarray]:
+    """The body of a digit's distal phalanx and its pad in that body's frame."""
     dl = layout.digits[digit]
-    body = model.body(f"{prefix}{digit}_distal").id
-    return data.xpos[body] + data.xmat[body].reshape(3, 3) @ np.array(
+    return model.body(f"{prefix}{digit}_distal").id, np.array(
         [0.5 * dl.lengths_m["distal"], 0.0, -dl.radii_m["distal"]])
 
 
