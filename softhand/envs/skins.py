@@ -343,9 +343,11 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
     model = spec.compile()
     choices = pair_choices(model, skins, reps, directory=directory, contact_laws=contact_laws)
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
+    data = mujoco.MjData(model)  # qpos0, for every pair's mobility
+    mujoco.mj_forward(model, data)
     for name in names:
         pair = spec.pair(name)
         pair.solref, pair.solimp = pair_law_values(model, name, choices[name].params,
-                                                   issues=issues)
+                                                   issues=issues, data=data)
     warn_range_issues(issues)
     return names

@@ -329,15 +329,23 @@ class _Problem:
         bounds = (np.linalg.norm(xpos[mine][:, None] - xpos[others][None], axis=2)
                   - rbound[mine][:, None] - rbound[others][None])
         order = np.argsort(bounds, axis=1, kind="stable").tolist()
+        # inside jacobian(): a geom that did not move, among others that did not, keeps its gap
+        known = None if self._moved is None or self._moved[others].any() else \
+            self._known.setdefault((id(others), cap), {})
         bounds, others = bounds.tolist(), others.tolist()
         out = []
         for k, g in enumerate(mine):
+            if known is not None and not self._moved[g] and g in known:
+                out.append(known[g])
+                continue
             best, row = cap, bounds[k]
             for i in order[k]:
                 if row[i] >= best + _PRUNE_M:
                     break
                 best = min(best, self.distance(g, others[i], cap))
             out.append(best)
+            if known is not None and not self._moved[g]:
+                known[g] = best
         return out
 
     def hand_point(self, body: int, local: np.ndarray) -> np.ndarray:

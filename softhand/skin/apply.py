@@ -270,6 +270,8 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                                     float(friction[2])])
             made[geom].append(name)
     model = spec.compile()
+    data = mujoco.MjData(model)  # qpos0, for every pair's mobility
+    mujoco.mj_forward(model, data)
     out = []
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
     by_class: dict[tuple[str, str], SoftContactParams | None] = {}
@@ -291,7 +293,8 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                     by_class[(design, key)] = _class_law(design, key, max_force_N, skins_dir)
                 this = by_class[(design, key)] or law
             used[name] = key if this is not law or key == PLATE_CLASS else f"{key}: plate law"
-            pair.solref, pair.solimp = pair_law_values(model, name, this, issues=issues)
+            pair.solref, pair.solimp = pair_law_values(model, name, this, issues=issues,
+                                                       data=data)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),
                                None if law is None else max_force_N, used, before[geom]))
     warn_range_issues(issues)

@@ -15,6 +15,7 @@ calibrated skin runs in the same rig.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -24,7 +25,7 @@ import numpy as np
 
 from softhand.laws.fit import Curve, paired_arrays
 from softhand.skin.representations import StockContact, get_representation
-from softhand.skin.soft_contact import SoftContactParams
+from softhand.skin.soft_contact import SoftContactParams, impedance
 from softhand.warn import warn_at_caller
 
 __all__ = ["CHECKED_FORCE_N", "ContactStability", "RangeIssue", "RigSettings", "SkinRangeWarning",
@@ -298,29 +299,18 @@ def contact_stable_timestep(params: SoftContactParams, inv_inertia: float, *,
         top_N: the largest force the contact should carry, N, > 0.
         n: penetrations sampled between 0 and the depth of ``top_N``.
     """
-    from softhand.skin.soft_contact import impedance
-
     if not (np.isfinite(inv_inertia) and inv_inertia > 0):
         raise ValueError(f"inv_inertia = {inv_inertia!r}: expected a finite number > 0 (1/kg)")
     if not (np.isfinite(mobility) and mobility >= 0):
         raise ValueError(f"mobility = {mobility!r}: expected a finite number >= 0")
     if not (np.isfinite(top_N) and top_N > 0):
         raise ValueError(f"top_N = {top_N!r}: expected a finite number of newtons > 0")
-    r_top = params.solimp[2]
-    while float(params.force(r_top * 1e3)) < top_N:
-        r_top *= 2
-    lo, hi = 0.0, r_top
-    for _ in range(60):  # the law is monotone in r: bisect for the depth of top_N
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if float(params.force(mid * 1e3)) < top_N else (lo, mid)
-    r = np.linspace(hi / n, hi, n)
-    d = impedance(r, params.solimp)
-    d_r = np.gradient(d, r)
+    r, d, stiffening = _stability_grid(params, float(top_N), int(n))
     dw = params.solimp[1]
     k = params.stiffness * inv_inertia / dw**2
     b = params.damping * inv_inertia / dw
     share = mobility * d / (mobility * d + 1 - d)  # beta
-    omega2 = share * k * (d + d_r * r + d_r * r / (1 - d))
+    omega2 = share * k * stiffening
     gamma = share * b
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.where(omega2 > 0, (np.sqrt(gamma**2 + 4 * omega2) - gamma) / omega2, np.inf)
@@ -331,8 +321,31 @@ def contact_stable_timestep(params: SoftContactParams, inv_inertia: float, *,
                             float(mobility))
 
 
+@functools.lru_cache(maxsize=256)
+def _stability_grid(params: SoftContactParams, top_N: float,
+                    n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`contact_stable_timestep` needs of the law alone (a scene's pairs share a few
+    laws): the penetrations up to the depth of ``top_N`` (m), the impedance there, and
+    :math:`d + d' r + d' r / (1 - d)`. Read-only arrays."""
+    r_top = params.solimp[2]
+    while float(params.force(r_top * 1e3)) < top_N:
+        r_top *= 2
+    lo, hi = 0.0, r_top
+    for _ in range(60):  # the law is monotone in r: bisect for the depth of top_N
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(params.force(mid * 1e3)) < top_N else (lo, mid)
+    r = np.linspace(hi / n, hi, n)
+    d = impedance(r, params.solimp)
+    d_r = np.gradient(d, r)
+    stiffening = d + d_r * r + d_r * r / (1 - d)
+    for a in (r, d, stiffening):
+        a.flags.writeable = False
+    return r, d, stiffening
+
+
 def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactParams, *,
-                    issues: list[RangeIssue] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                    issues: list[RangeIssue] | None = None,
+                    data: mujoco.MjData | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pair's ``solref`` and ``solimp`` for ``params``, scaled by its inverse inertia.
 
     ``model`` is the compiled model (its ``body_invweight0``); the values may go into that model
@@ -344,7 +357,8 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
     :func:`pair_mobility` at ``qpos0``; ``discrete`` integrates it implicitly and is not
     checked). With ``issues`` None this warns at once (:func:`warn_range_issues`); a caller that
     sets many pairs passes a list, which collects the issues, and warns once for all of them
-    (:func:`warn_range_issues`).
+    (:func:`warn_range_issues`); it may also pass ``data``, the model's state at ``qpos0`` after
+    ``mj_forward``, made once for all of them (:func:`pair_mobility`).
     """
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     if pid < 0:
@@ -360,7 +374,7 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
                                 f"pair {name!r}: timestep {h * 1e3:g} ms is outside the calibrated "
                                 f"range {lo * 1e3:g}-{hi * 1e3:g} ms"))
     if model.opt.integrator != mujoco.mjtIntegrator.mjINT_DISCRETE:
-        st = contact_stable_timestep(params, inv, mobility=pair_mobility(model, pid))
+        st = contact_stable_timestep(params, inv, mobility=pair_mobility(model, pid, data))
         if h > st.max_timestep_s:
             found.append(RangeIssue(
                 "stiffness", name, h / st.max_timestep_s,
