@@ -10,6 +10,7 @@ name               folder                                      written by / read
 ``SKINS_DIR``      ``calibration/skins``                       ``calibrate`` / hands, envs
 ``SENSORS_DIR``    ``calibration/sensors`` (+ ``fe``)          ``sensors calibrate`` / envs
 ``REPORTS_DIR``    ``reports``                                 ``bench *``
+``cache_dir()``    ``~/.cache/softhand`` (``SOFTHAND_CACHE_DIR``) solved grasps / hands
 =================  ==========================================  ============================
 
 The shipped data is the package ``softhand.calibration`` (``calibration/`` of the repository, read
@@ -25,9 +26,8 @@ import os
 from importlib import resources
 from pathlib import Path
 
-__all__ = ["CALIBRATION_DIR", "FE_DIR", "IN_CHECKOUT", "REPORTS_DIR", "REPO_ROOT", "SENSORS_DIR",
-           "SKINS_DIR",
-           "is_shipped"]
+__all__ = ["CACHE_ENV", "CALIBRATION_DIR", "FE_DIR", "IN_CHECKOUT", "REPORTS_DIR", "REPO_ROOT",
+           "SENSORS_DIR", "SKINS_DIR", "cache_dir", "is_shipped"]
 
 def _calibration_dir() -> Path:
     """The folder of the package ``softhand.calibration`` (``calibration/`` of a checkout)."""
@@ -42,6 +42,24 @@ FE_DIR = CALIBRATION_DIR / "fe"
 SKINS_DIR = CALIBRATION_DIR / "skins"
 SENSORS_DIR = CALIBRATION_DIR / "sensors"
 REPORTS_DIR = REPO_ROOT / "reports" if IN_CHECKOUT else Path("reports")
+
+
+#: Environment variable naming the folder of softhand's caches (solved grasps); ``off``: none.
+CACHE_ENV = "SOFTHAND_CACHE_DIR"
+
+
+def cache_dir() -> Path | None:
+    """The folder of softhand's caches of derived results (never shipped data): ``$SOFTHAND_CACHE_DIR``,
+    else ``$XDG_CACHE_HOME/softhand``, else ``~/.cache/softhand``; None when
+    ``SOFTHAND_CACHE_DIR`` is ``off``. A cache entry is keyed by everything its result depends on,
+    so a stale entry is never read; deleting the folder only costs the time to recompute."""
+    value = os.environ.get(CACHE_ENV)
+    if value is not None and value.strip().lower() == "off":
+        return None
+    if value:
+        return Path(value).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base).expanduser() / "softhand"
 
 
 def is_shipped(path: str | os.PathLike) -> bool:

@@ -140,3 +140,34 @@ def test_pruned_residual_and_jacobian_equal_measuring_every_pair():
                                              [b.reshape(-1, 1) for b in bounds])
             assert np.array_equal(problem.jacobian(x[:, None], r, contacts), expect)
     assert checked > 50  # the states include overlapping pairs (measured 1,000 and more)
+
+
+def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monkeypatch):
+    """solve_grasp keeps each solution in softhand.paths.cache_dir(); a new process reads it back
+    instead of solving: the same grasp bit for bit. Another hand size is another entry; a
+    corrupt entry is solved again; SOFTHAND_CACHE_DIR=off keeps nothing."""
+    from softhand.hands import grasp as g
+
+    monkeypatch.setenv("SOFTHAND_CACHE_DIR", str(tmp_path))
+    config = SceneConfig()
+    solved = g.solve_grasp.__wrapped__(config)  # solves (an empty cache) and writes the entry
+    entries = list((tmp_path / "grasps").glob("*.json"))
+    assert len(entries) == 1
+    calls = []
+    monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or pytest.fail("solved"))
+    read = g.solve_grasp.__wrapped__(config)
+    assert not calls
+    for field in ("partner_pos_m", "partner_quat", "partner_q", "prosthetic_q"):
+        assert np.array_equal(getattr(read, field), getattr(solved, field)), field
+    assert (read.cost, read.iterations, read.metrics, read.touching_phalanges) == (
+        solved.cost, solved.iterations, solved.metrics, solved.touching_phalanges)
+    other = SceneConfig(partner=PartnerConfig(hand=HandConfig(hand_length_m=0.18)))
+    assert g._cache_path(other, GRASP_SETTINGS) != entries[0]
+    entries[0].write_text("{not json")
+    monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or (
+        solved.cost, np.concatenate([np.zeros(6), solved.partner_q, solved.prosthetic_q]),
+        list(solved.iterations)))
+    g.solve_grasp.__wrapped__(config)
+    assert len(calls) == 1  # the corrupt entry was solved again
+    monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
+    assert g._cache_path(config, GRASP_SETTINGS) is None

@@ -55,8 +55,11 @@ geom that moved (the others keep the distance they have at the column's base poi
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -67,6 +70,8 @@ from softhand.hands.config import SceneConfig
 from softhand.hands.layout import HandLayout, hand_layout
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.hands.scene import partner_quat, prosthetic_quat, scene_spec, web_point
+from softhand.io import atomic_write_text
+from softhand.paths import cache_dir
 
 __all__ = [
     "GRASP_SETTINGS",
@@ -462,7 +467,10 @@ def _solve(problem: _Problem, x0: np.ndarray, contacts: bool, max_iter: int):
 @functools.lru_cache(maxsize=64)
 def solve_grasp(config: SceneConfig | None = None,
                 settings: GraspSettings = GRASP_SETTINGS) -> Grasp:
-    """Solve the handshake grasp of the scene's two hands (cached per config and settings).
+    """Solve the handshake grasp of the scene's two hands (cached per config and settings, in
+    this process and on disk: a solution in softhand.paths.cache_dir() is read back instead of
+    solved, bit for bit the same; a population's partners, or a sweep over skins and controllers,
+    solve each hand size once per machine).
 
     Args:
         config: the scene (both hands' sizes, the prosthetic wrist pose, the starting crossing
@@ -475,6 +483,29 @@ def solve_grasp(config: SceneConfig | None = None,
     """
     config = config or SceneConfig()
     problem = _Problem(config, settings)
+    path = _cache_path(config, settings)
+    known = _read_cached(path, problem.n)
+    if known is not None:
+        cost, x, iterations = known
+    else:
+        cost, x, iterations = _solve_starts(problem, settings)
+        _write_cached(path, cost, x, iterations)
+    problem.set_state(x)
+    pos, quat = problem.pose(x)
+    n_hum = len(PARTNER_JOINTS)
+    metrics = grasp_metrics(problem.m, problem.d, problem.pro, problem.hum)
+    touching = tuple(
+        problem.m.geom(g).name.removeprefix("hum_tissue_") for g in problem.hum_phalanges
+        if min(problem.distance(g, o) for o in problem.pro_soft) < 2 * settings.press_m)
+    return Grasp(partner_pos_m=pos, partner_quat=quat, partner_q=x[6:6 + n_hum].copy(),
+                 prosthetic_q=x[6 + n_hum:].copy(), cost=cost, iterations=tuple(iterations),
+                 metrics=metrics, touching_phalanges=touching, settings=settings)
+
+
+def _solve_starts(problem: _Problem, settings: GraspSettings
+                  ) -> tuple[float, np.ndarray, list[int]]:
+    """The grasp from the first start whose cost meets GOOD_COST_M2, else the cheapest:
+    (cost, variables, iterations per stage)."""
     best = None
     for start in problem.starts():
         x, iterations = start, []
@@ -486,17 +517,59 @@ def solve_grasp(config: SceneConfig | None = None,
             best = (cost, x, iterations)
         if cost < GOOD_COST_M2:  # a grasp that meets its targets: no other start needed
             break
-    cost, x, iterations = best
-    problem.set_state(x)
-    pos, quat = problem.pose(x)
-    n_hum = len(PARTNER_JOINTS)
-    metrics = grasp_metrics(problem.m, problem.d, problem.pro, problem.hum)
-    touching = tuple(
-        problem.m.geom(g).name.removeprefix("hum_tissue_") for g in problem.hum_phalanges
-        if min(problem.distance(g, o) for o in problem.pro_soft) < 2 * settings.press_m)
-    return Grasp(partner_pos_m=pos, partner_quat=quat, partner_q=x[6:6 + n_hum].copy(),
-                 prosthetic_q=x[6 + n_hum:].copy(), cost=cost, iterations=tuple(iterations),
-                 metrics=metrics, touching_phalanges=touching, settings=settings)
+    return best
+
+
+@functools.lru_cache(maxsize=1)
+def _code_digest() -> str:
+    """What a grasp depends on besides its config and settings: the source of softhand.hands
+    (the hands, the scene, this solver), the paper's data file, and the MuJoCo and NumPy that
+    compute it."""
+    h = hashlib.sha256(f"mujoco {mujoco.__version__} numpy {np.__version__}".encode())
+    here = Path(__file__).resolve().parent
+    for path in (*sorted(here.glob("*.py")), here.parent / "data" / "paper.json"):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def _cache_path(config: SceneConfig, settings: GraspSettings) -> Path | None:
+    """Where the grasp of ``config`` and ``settings`` is cached (softhand.paths.cache_dir), keyed
+    by both (their repr: every field, floats exactly) and by :func:`_code_digest`; None: no
+    cache."""
+    root = cache_dir()
+    if root is None:
+        return None
+    key = hashlib.sha256(f"{config!r}|{settings!r}|{_code_digest()}".encode()).hexdigest()
+    return root / "grasps" / f"{key[:32]}.json"
+
+
+def _read_cached(path: Path | None, n: int) -> tuple[float, np.ndarray, list[int]] | None:
+    """A cached solution (cost, variables, iterations), or None when there is none or it cannot
+    be read (then the grasp is solved again and the entry rewritten)."""
+    if path is None:
+        return None
+    try:
+        entry = json.loads(path.read_text())
+        x = np.array(entry["x"], dtype=float)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            return None
+        return float(entry["cost"]), x, [int(i) for i in entry["iterations"]]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _write_cached(path: Path | None, cost: float, x: np.ndarray, iterations: list[int]) -> None:
+    """Keep a solution for the next process (JSON floats round-trip exactly); a cache that
+    cannot be written is skipped: it only saves time."""
+    if path is None:
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, json.dumps({"cost": cost, "x": x.tolist(),
+                                            "iterations": list(iterations)}))
+    except OSError:
+        pass
 
 
 def set_grasp_state(model: mujoco.MjModel, data: mujoco.MjData, grasp: Grasp, *,
