@@ -246,6 +246,8 @@ class SensorLayout:
         self._bone_idx = (np.array([a for _, a in bones], int)[:, None]
                           + np.arange(4 * SENSOR_SLOTS)[None, :] if bones
                           else np.zeros((0, 4 * SENSOR_SLOTS), int))
+        # a region's bone sensors are consecutive: each region's sum is one reduceat segment
+        self._bone_regions, self._bone_starts = np.unique(self._bone_region, return_index=True)
         feel = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors])
         self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
 
@@ -259,8 +261,9 @@ class SensorLayout:
         if self._bone_idx.size:
             per_bone = contact_sensor_force(
                 sensordata[..., self._bone_idx].reshape(*lead, -1, SENSOR_SLOTS, 4))
-            for k, region in enumerate(self._bone_region):  # in order, as np.add.at adds
-                bone[..., region] += per_bone[..., k]
+            # each region's bones summed in order (a few per region: a sequential sum)
+            bone[..., self._bone_regions] = np.add.reduceat(per_bone, self._bone_starts,
+                                                            axis=-1)
         return skin + bone, bone
 
     def saturated(self, sensordata: np.ndarray) -> np.ndarray:

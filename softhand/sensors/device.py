@@ -40,7 +40,6 @@ from typing import Any
 
 import numpy as np
 
-from softhand.laws.elastic import monotone_inverse
 from softhand.sensors.transfer import TransferLaw
 from softhand.validate import check_number
 
@@ -128,6 +127,12 @@ class _Share:
         self.u = np.linspace(0.0, top, int(np.ceil(top / self.STEP_N)) + 1)
         self.g = law.share.force(self.u)
         self.top, self.k_top = top, law.share.end_stiffness
+        # the table as monotone_inverse takes it (its running maximum), made once, not per step
+        self.g_rising = np.maximum.accumulate(self.g)
+
+    def inverse(self, g: np.ndarray) -> np.ndarray:
+        """u at which the share reaches ``g``: monotone_inverse(g, u, g(u)) of the table."""
+        return np.interp(g, self.g_rising, self.u)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         out = np.interp(u, self.u, self.g, left=0.0)
@@ -191,8 +196,7 @@ class TransferBank:
         out = np.array(reading_N, dtype=float)
         for key, (law, idx) in self._groups.items():
             share, r = self._share[key], out[idx]
-            out[idx] = np.where(r > 0, monotone_inverse(r, share.u, share.g) + law.dead_band_N,
-                                0.0)
+            out[idx] = np.where(r > 0, share.inverse(r) + law.dead_band_N, 0.0)
         return out
 
 
