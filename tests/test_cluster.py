@@ -166,6 +166,31 @@ def test_an_unreachable_cluster_and_cluster_with_threads_are_refused(no_work, mo
 
 
 @pytest.mark.slow
+def test_a_population_sweep_on_the_cluster_gives_the_local_results(cluster, tmp_path):
+    """2 partners x 2 skins x 1 controller through the command line, on 2 local worker processes
+    and on the cluster: the same combinations, partners and per-region peak and mean forces,
+    exactly."""
+    sweep = ["population", "--n", "2", "--design", "pocket2-sil", "--design", "solid-pu",
+             "--controller", "neutral"]
+    listed = {}
+    for where, flags in (("local", ["--workers", "2"]), ("cluster", ["--cluster", cluster])):
+        res = CliRunner().invoke(main, [*sweep, *flags, "--out", str(tmp_path / where)],
+                                 catch_exceptions=False)
+        assert res.exit_code == 0, res.output
+        listed[where] = json.loads((tmp_path / where / "sweep.json").read_text())["combinations"]
+    assert listed["local"] == listed["cluster"]
+    assert [c["folder"] for c in listed["local"]] == ["pocket2-sil-neutral", "solid-pu-neutral"]
+    for combination in listed["local"]:
+        local, remote = (json.loads((tmp_path / where / combination["folder"] / "results.json")
+                                    .read_text()) for where in ("local", "cluster"))
+        assert local["summary"] == remote["summary"]
+        assert len(local["partners"]) == 2
+        for a, b in zip(local["partners"], remote["partners"], strict=True):
+            assert a["partner"] == b["partner"]
+            assert a["peak_N"] == b["peak_N"] and a["mean_N"] == b["mean_N"], a["partner"]
+
+
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_task_and_drops_the_running_one(cluster, tmp_path):
     """As locally (test_interrupts), except that the task running on a worker runs on there: a
     thread cannot be stopped. Last in the module: that task holds one of the two workers."""

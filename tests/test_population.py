@@ -123,3 +123,103 @@ def test_population_on_the_vector_env_equals_one_partner_at_a_time():
     for got, ref in zip(batched, single, strict=True):
         assert got["partner"] == ref["partner"] and got["warnings"] == ref["warnings"]
         assert worst(got, ref) <= 1e-9
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    def forbidden(*args, **kwargs):
+        raise AssertionError("work started before the input was rejected")
+
+    import softhand.parallel
+
+    monkeypatch.setattr(softhand.parallel, "run_tasks", forbidden)
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--design", "pocket2-sil", "--design", "pocket3-sil"], "--design 'pocket3-sil': skin "
+                                                             "design 'pocket3-sil' is unknown"),
+    (["--design", "solid-pu", "--design", " "], "--design ''"),
+    (["--controller", "neutral", "--controller", "grab"], "'grab' is not one of"),
+    (["--hand", "human", "--controller", "neutral", "--controller", "force"],
+     "--controller force"),
+])
+def test_a_bad_sweep_input_is_refused_before_any_work(args, needle, no_work, tmp_path):
+    """Every --design and --controller of a sweep is checked before the first handshake: a bad
+    second one is one line naming the flag and the value, and nothing is written."""
+    res = CliRunner().invoke(main, ["population", "--n", "2", *args, "--out",
+                                    str(tmp_path / "p")])
+    assert res.exit_code == 2, (res.output, res.exception)
+    lines = [line for line in res.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0], res.output
+    assert "Traceback" not in res.output
+    assert not (tmp_path / "p").exists() or not any((tmp_path / "p").iterdir())
+
+
+def test_a_sweep_writes_a_folder_per_combination_and_keeps_them_on_ctrl_c(monkeypatch,
+                                                                          tmp_path):
+    """The sweep's layout and its Ctrl-C, on stand-in handshakes (in this process, --workers 1):
+    one subfolder DESIGN-CONTROLLER per combination with the files of a single run, sweep.json
+    beside them; one combination writes straight into --out, as before; Ctrl-C in the second
+    combination keeps the first whole and the second's finished partner, and lists the rest."""
+    import softhand.envs.handshake
+    import softhand.envs.population
+
+    regions = paper()["handshake"]["regions"]
+    ran, stop_at = [], []
+
+    def handshake(partner, settings):
+        ran.append((settings["design"], settings["controller"], partner.index))
+        if len(ran) == stop_at[0]:
+            raise KeyboardInterrupt
+        force = 1.0 + partner.index + (settings["design"] == "solid-pu")
+        return {"partner": partner.to_dict(), "peak_N": dict.fromkeys(regions, force),
+                "mean_N": dict.fromkeys(regions, force / 2), "over_2N": [],
+                "force_accounting": {"bone_on_bone_peak_N": 0.0},
+                "grip": {"p95_error_pct": 1.0}, "warnings": 0, "wall_s": 0.0}
+
+    monkeypatch.setattr(softhand.envs.population, "run_partner", handshake)
+    monkeypatch.setattr(softhand.envs.handshake, "HandshakeEnv", lambda **kw: None)
+
+    def invoke(out, *args):
+        return CliRunner().invoke(main, ["population", "--n", "2", "--workers", "1", *args,
+                                         "--out", str(tmp_path / out)])
+
+    stop_at[:] = [0]
+    res = invoke("one", "--design", "solid-pu")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "one").iterdir()) == [
+        "fig4.png", "partners.json", "results.csv", "results.json"]
+    ran.clear()
+    res = invoke("sweep", "--design", "pocket2-sil", "--design", "solid-pu")
+    assert res.exit_code == 0, res.output
+    assert ran == [("pocket2-sil", "neutral", 0), ("pocket2-sil", "neutral", 1),
+                   ("solid-pu", "neutral", 0), ("solid-pu", "neutral", 1)]
+    sweep = json.loads((tmp_path / "sweep" / "sweep.json").read_text())
+    assert sweep["partners"] == {"n": 2, "seed": 0}
+    assert [(c["design"], c["controller"], c["folder"], c["finished"])
+            for c in sweep["combinations"]] == [("pocket2-sil", "neutral", "pocket2-sil-neutral", 2),
+                                                ("solid-pu", "neutral", "solid-pu-neutral", 2)]
+    # peaks 1 and 2 N (pocket2-sil), 2 and 3 N (solid-pu): over 2 N in half, not more
+    assert all(c["regions_over_2N_in_most_partners"] == [] for c in sweep["combinations"])
+    for c in sweep["combinations"]:
+        folder = tmp_path / "sweep" / c["folder"]
+        assert sorted(p.name for p in folder.iterdir()) == sorted(
+            p.name for p in (tmp_path / "one").iterdir())
+    one, swept = (json.loads((tmp_path / f / "results.json").read_text())
+                  for f in ("one", "sweep/solid-pu-neutral"))
+    del one["settings"]["command"], swept["settings"]["command"]
+    assert swept == one  # a combination's results are those of a run of it alone
+
+    ran.clear()
+    stop_at[:] = [4]  # Ctrl-C in the second combination's second partner
+    res = invoke("stopped", "--design", "pocket2-sil", "--controller", "neutral",
+                 "--controller", "force")
+    assert res.exit_code == 130, res.output
+    assert res.output.strip().splitlines()[-1] == (
+        f"interrupted (Ctrl-C): wrote 3 of 4 handshakes to {tmp_path / 'stopped'}; missing: "
+        "pocket2-sil-force/1")
+    sweep = json.loads((tmp_path / "stopped" / "sweep.json").read_text())
+    assert [(c["finished"], c["missing"]) for c in sweep["combinations"]] == [
+        (2, {}), (1, {"1": "interrupted"})]
+    force = json.loads((tmp_path / "stopped" / "pocket2-sil-force" / "results.json").read_text())
+    assert [p["partner"]["index"] for p in force["partners"]] == [0]
