@@ -133,3 +133,40 @@ def test_worlds_with_equal_keywords_share_their_scene_and_match_single_envs():
                             np.abs(info["region_forces_N"][w] - f1).max())
     vec.close()
     assert worst <= TOL
+
+
+def test_scale_benchmark_times_every_stage_once_and_changes_nothing(tmp_path):
+    """softhand bench handshake --scale: the instrumented episode gives the same forces as a plain
+    one (the wrappers only time), every stage is timed once (the remainder left for the step body
+    is not negative: no call counted twice), the wrappers are gone afterwards, and the report
+    lists every stage and each vector env's worlds. Its timings are reported, never asserted."""
+    import mujoco
+
+    from softhand.bench.scale import STAGES, run_scale_benchmark, step_stages
+    from softhand.envs.controllers import make_controller
+
+    def forces(env):
+        ctrl, out = make_controller("neutral"), []
+        obs, info = env.reset(seed=0)
+        for _ in range(150):
+            obs, _, term, trunc, info = env.step(ctrl(obs, info))
+            out.append(list(info["region_forces_N"].values()))
+        return np.array(out)
+
+    env = HandshakeEnv()
+    plain = forces(env)
+    step = mujoco.mj_step
+    stages = step_stages(env)
+    assert mujoco.mj_step is step and "step" not in vars(env.sensors)
+    assert np.array_equal(forces(env), plain)
+    us = stages["stages_us"]
+    assert set(us) == {label for label, _ in STAGES}
+    assert all(v >= 0.0 for v in us.values()), us
+    assert 0.0 < us["physics"] < stages["env_step_us"]
+    assert sum(us.values()) == pytest.approx(stages["env_step_us"])
+    assert 0.0 < stages["python_share"] < 1.0
+    md = run_scale_benchmark(tmp_path, worlds=(1, 2), repeats=1)
+    for label, _ in STAGES:
+        assert f"| {label} |" in md
+    assert "| vector env, 2 worlds |" in md
+    assert (tmp_path / "bench-handshake-scale.json").is_file()

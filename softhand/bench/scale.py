@@ -1,0 +1,219 @@
+"""Benchmark of handshakes at scale: one env, the vector env, the physics ceiling, where a step's
+time goes.
+
+Measures, in one process on this machine (``softhand bench handshake --scale``, written to
+``bench-handshake-scale.json`` and ``.md``), the default handshake (pocket2-sil, neutral
+controller, 2 ms physics step, an env step every 10 ms) over whole episodes:
+
+* **one env**: env steps per second of ``env.step`` alone (the controller's own time is not the
+  env's), best of ``repeats`` episodes;
+* **physics ceiling**: the same episode's ``mj_step`` calls alone, timed inside the episode: the
+  env steps per second that the physics allows, with no Python around it;
+* **Python per stage**: an instrumented episode (each stage of ``HandshakeEnv.step`` timed by a
+  wrapper, about a microsecond each): the time per env step of the physics and of every piece of
+  Python around it, and the Python share, 1 - physics / env step;
+* **vector env**: :class:`~softhand.envs.vector.HandshakeVectorEnv` with N worlds of the same
+  scene (seeds 0..N-1), stepped with the controller's array entry for as many env steps as one
+  episode, on the threads this process may use: env steps per second summed over the worlds and
+  the aggregate real-time factor (simulated seconds of all worlds per wall second).
+
+Every figure is wall-clock time of this machine, reported and never asserted by tests; the load
+average at the start and the end is printed with the table (other work on the machine slows it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import mujoco
+
+from softhand.bench.common import machine_info, machine_line
+from softhand.envs.controllers import make_controller
+from softhand.envs.handshake import HandshakeEnv
+from softhand.envs.vector import HandshakeVectorEnv
+from softhand.io import atomic_write_json, atomic_write_text
+from softhand.paths import REPORTS_DIR
+
+__all__ = ["STAGES", "VECTOR_WORLDS", "run_scale_benchmark", "step_stages"]
+
+#: Worlds of the vector env measured by default.
+VECTOR_WORLDS = (2, 8, 32, 128)
+#: The stages of an env step, in the report's order: (label, what it covers).
+STAGES = (
+    ("physics", "mj_step, the frame's 5 physics steps"),
+    ("physics loop", "the mount path and the divergence checks around mj_step"),
+    ("region forces", "the regions' contact sensors summed, skin and bone"),
+    ("embedded sensors", "the transfer laws and the electronics of the 18 patch sensors"),
+    ("saturated sensors", "contact sensors that matched more contacts than their slots"),
+    ("range check", "the contacts beyond their law's calibrated range"),
+    ("partner script", "the partner's feel and its grip regulator"),
+    ("phase and reward", "the handshake's phase and the reward's terms"),
+    ("info", "the info dict"),
+    ("observation", "the observation vector"),
+    ("step body", "the action's checks and the rest of step()"),
+)
+
+
+@contextlib.contextmanager
+def _timed(totals: dict[str, float]) -> Iterator[Callable[[Any, str, str], None]]:
+    """``wrap(obj, attribute, stage)`` replaces a callable by one that adds its wall time to
+    ``totals[stage]``; every wrapper is removed on exit."""
+    undo: list[tuple[Any, str, Any, bool]] = []
+
+    def wrap(obj: Any, name: str, stage: str) -> None:
+        inner = getattr(obj, name)
+
+        def timed(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return inner(*args, **kwargs)
+            finally:
+                totals[stage] += time.perf_counter() - t0
+
+        undo.append((obj, name, inner, name in vars(obj)))
+        setattr(obj, name, timed)
+
+    try:
+        yield wrap
+    finally:
+        for obj, name, inner, own in reversed(undo):
+            if own:
+                setattr(obj, name, inner)
+            else:
+                delattr(obj, name)
+
+
+def _episode(env: HandshakeEnv, seed: int, step: Callable | None = None) -> tuple[int, float]:
+    """One episode with the neutral controller: (env steps, wall seconds inside env.step)."""
+    ctrl = make_controller("neutral")
+    step = step or env.step
+    obs, info = env.reset(seed=seed)
+    steps, wall = 0, 0.0
+    while True:
+        action = ctrl(obs, info)
+        t0 = time.perf_counter()
+        obs, _, terminated, truncated, info = step(action)
+        wall += time.perf_counter() - t0
+        steps += 1
+        if terminated or truncated:
+            return steps, wall
+
+
+def step_stages(env: HandshakeEnv, seed: int = 0) -> dict[str, Any]:
+    """One instrumented episode of ``env``: per :data:`STAGES` label its time per env step (us),
+    the env step's time (us, wrappers included) and the Python share (1 - physics / env step)."""
+    totals: dict[str, float] = defaultdict(float)
+    physics, scenario = env.physics, env.scenario
+    with _timed(totals) as wrap:
+        wrap(mujoco, "mj_step", "physics")
+        wrap(physics, "advance", "advance")
+        wrap(physics, "region_forces", "region forces")
+        wrap(env.sensors, "step", "embedded sensors")
+        wrap(physics, "saturated_sensors", "saturated sensors")
+        wrap(physics, "contacts_above", "range check")
+        wrap(env, "_check_range", "range check")
+        wrap(physics, "partner_feel", "partner script")
+        wrap(scenario, "partner_targets", "partner script")
+        wrap(scenario, "phase", "phase and reward")
+        wrap(scenario, "reward_terms", "phase and reward")
+        wrap(env, "_info", "info")
+        wrap(env, "_obs", "observation")
+        steps, wall = _episode(env, seed)
+    totals["physics loop"] = totals.pop("advance") - totals["physics"]
+    totals["step body"] = wall - sum(totals.values())
+    per_step = {label: 1e6 * totals[label] / steps for label, _ in STAGES}
+    env_step = 1e6 * wall / steps
+    return {"steps": steps, "env_step_us": env_step, "stages_us": per_step,
+            "python_share": 1.0 - per_step["physics"] / env_step}
+
+
+def _vector(worlds: int, steps: int, nthread: int | None) -> dict[str, Any]:
+    vec = HandshakeVectorEnv(num_envs=worlds, nthread=nthread)
+    try:
+        ctrl = make_controller("neutral")
+        obs, info = vec.reset(seed=0)
+        wall = 0.0
+        for _ in range(steps):
+            actions = ctrl.actions(obs, info, vec.region_names)
+            t0 = time.perf_counter()
+            obs, _, _, _, info = vec.step(actions)
+            wall += time.perf_counter() - t0
+        dt = vec.frame_skip * float(vec.envs[0].model.opt.timestep)
+    finally:
+        vec.close()
+    return {"worlds": worlds, "steps": steps, "wall_s": wall,
+            "env_steps_per_s": worlds * steps / wall,
+            "realtime_factor": worlds * steps * dt / wall}
+
+
+def run_scale_benchmark(out_dir: str | Path = REPORTS_DIR, *,
+                        worlds: tuple[int, ...] = VECTOR_WORLDS, repeats: int = 3,
+                        nthread: int | None = None,
+                        progress: Callable[[str], None] | None = None) -> str:
+    """Run the benchmark (module docstring), write ``bench-handshake-scale.json`` and ``.md`` to
+    ``out_dir``, return the Markdown. ``nthread``: the vector env's threads (default: the CPUs
+    this process may use); ``progress`` gets a line before each part."""
+    say = progress or (lambda line: None)
+    out = Path(out_dir)
+    data: dict[str, Any] = {"machine": machine_info()}
+    say("one env")
+    env = HandshakeEnv()
+    dt = env.frame_skip * float(env.model.opt.timestep)
+    runs = [_episode(env, seed=0) for _ in range(repeats)]
+    steps, wall = min(runs, key=lambda r: r[1])
+    say("the physics ceiling and the stages")
+    stages = min((step_stages(env) for _ in range(repeats)), key=lambda s: s["env_step_us"])
+    env.close()
+    data["single"] = {"steps": steps, "wall_s": wall, "env_steps_per_s": steps / wall,
+                      "realtime_factor": steps * dt / wall}
+    data["ceiling"] = {"env_steps_per_s": 1e6 / stages["stages_us"]["physics"],
+                       "physics_steps_per_s": 1e6 * env.frame_skip
+                       / stages["stages_us"]["physics"]}
+    data["stages"] = stages
+    data["vector"] = []
+    for n in worlds:
+        say(f"vector env, {n} worlds")
+        data["vector"].append(_vector(n, steps, nthread))
+    data["nthread"] = nthread or data["machine"]["available_cpus"]
+    data["load_1min_end"] = machine_info()["load_1min"]
+    atomic_write_json(out / "bench-handshake-scale.json", data)
+    md = markdown(data)
+    atomic_write_text(out / "bench-handshake-scale.md", md)
+    return md
+
+
+def markdown(d: dict[str, Any]) -> str:
+    """The report of :func:`run_scale_benchmark`'s data."""
+    single, ceiling, stages = d["single"], d["ceiling"], d["stages"]
+    dt_s = single["realtime_factor"] / single["env_steps_per_s"]
+    lines = [
+        "# Handshakes at scale (`softhand bench handshake --scale`)", "",
+        f"{machine_line(d['machine'])} Load average at the end {d['load_1min_end']}.", "",
+        f"The default handshake (pocket2-sil, neutral controller, a 2 ms physics step, an env step "
+        f"every {1e3 * dt_s:.0f} ms), {single['steps']} env steps an episode. Env steps per "
+        "second of `step()` alone (the controller's time is not the env's); the vector env's "
+        f"worlds share one scene and step on {d['nthread']} thread(s) with `mujoco.batch`:", "",
+        "| what | env steps/s | real-time factor |", "|---|---|---|",
+        f"| one env (best of its episodes) | {single['env_steps_per_s']:.0f} | "
+        f"{single['realtime_factor']:.1f}x |",
+    ]
+    for v in d["vector"]:
+        lines.append(f"| vector env, {v['worlds']} worlds | {v['env_steps_per_s']:.0f} | "
+                     f"{v['realtime_factor']:.1f}x |")
+    lines += [f"| physics ceiling (the episode's `mj_step` alone) | "
+              f"{ceiling['env_steps_per_s']:.0f} | "
+              f"{ceiling['env_steps_per_s'] * dt_s:.1f}x |", "",
+              f"Where one env step's time goes (an instrumented episode: "
+              f"{stages['env_step_us']:.0f} us a step, wrappers included); the Python share "
+              f"is **{100 * stages['python_share']:.0f} %**:", "",
+              "| stage | us per env step | share | what |", "|---|---|---|---|"]
+    for label, what in STAGES:
+        us = stages["stages_us"][label]
+        lines.append(f"| {label} | {us:.0f} | {100 * us / stages['env_step_us']:.0f} % | "
+                     f"{what} |")
+    return "\n".join(lines) + "\n"
