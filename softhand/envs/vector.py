@@ -131,6 +131,10 @@ class HandshakeVectorEnv(VectorEnv):
         worlds: per world, a mapping of HandshakeEnv keywords over ``env_kwargs`` (length
             ``num_envs``; e.g. ``{"partner_size": (180, 85)}``, ``{"design": "solid-pu"}``).
         nthread: threads of each mujoco.batch Batch (default: the CPUs this process may use).
+        backend: ``"cpu"`` (default: ``mujoco.batch``, softhand.envs.batch) or ``"warp"``
+            (MuJoCo Warp on a GPU, float32, worlds of one scene: softhand.envs.warp).
+        device: with ``backend="warp"``, the Warp device ("cuda:0", "cpu"; default: a GPU where
+            there is one).
         autoreset_mode: ``AutoresetMode.SAME_STEP`` or ``DISABLED`` (module docstring).
         envs: the worlds as single envs built already (instead of ``num_envs``, ``worlds`` and
             ``env_kwargs``): their scenes, laws and sensors; their own physics is not stepped.
@@ -144,7 +148,7 @@ class HandshakeVectorEnv(VectorEnv):
     metadata: ClassVar[dict] = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, num_envs: int = 1, *, worlds: Sequence[Mapping[str, Any]] | None = None,
-                 nthread: int | None = None,
+                 nthread: int | None = None, backend: str = "cpu", device: str | None = None,
                  autoreset_mode: AutoresetMode = AutoresetMode.SAME_STEP,
                  envs: Sequence[HandshakeEnv] | None = None, **env_kwargs) -> None:
         if envs is not None:  # worlds built already (e.g. each under its own warnings record)
@@ -158,6 +162,9 @@ class HandshakeVectorEnv(VectorEnv):
         if worlds is not None and (isinstance(worlds, (str, Mapping)) or len(worlds) != n):
             raise ValueError(f"worlds = {show(worlds)}: expected {n} mappings of HandshakeEnv "
                              "keywords, one per world")
+        if backend not in ("cpu", "warp"):
+            raise ValueError(f"backend = {show(backend)}: allowed 'cpu' (mujoco.batch) or 'warp' "
+                             "(MuJoCo Warp)")
         modes = (AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
         if autoreset_mode not in modes:
             raise ValueError(f"autoreset_mode = {show(autoreset_mode)}: allowed "
@@ -185,8 +192,15 @@ class HandshakeVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, n)
         self.observation_space = batch_space(self.single_observation_space, n)
         #: the worlds' physics, one mujoco.batch per model layout (softhand.envs.batch)
-        self.physics = BatchPhysics([e.model for e in self.envs], self.frame_skip,
-                                    **first.physics_reads, nthread=nthread)
+        models = [e.model for e in self.envs]
+        if backend == "warp":
+            from softhand.envs.warp import WarpPhysics
+
+            self.physics = WarpPhysics(models, self.frame_skip, **first.physics_reads,
+                                       device=device)
+        else:
+            self.physics = BatchPhysics(models, self.frame_skip, **first.physics_reads,
+                                        nthread=nthread)
         self._pro_qpos = np.array([e._pro_qpos for e in self.envs])
         self._pro_dof = np.array([e._pro_dof for e in self.envs])
         self._pro_act = np.array([e._pro_act for e in self.envs])
