@@ -71,6 +71,7 @@ from softhand.cli_inputs import (
     parse_sensors,
     parse_skin_overrides,
     progress_bar,
+    progress_line,
     sensor_flag_message,
     sensor_spec_of,
     with_options,
@@ -734,11 +735,11 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     designs = sorted(set(run.skins.values()))
     skins_text = (f"{designs[0]} on every region" if len(designs) == 1
                   else f"{len(designs)} skins ({', '.join(designs)})")
-    who = ("the relaxed human hand (the paper's protocol)" if ep["hand"] == "human"
-           else f"prosthetic hand, {skins_text}, controller {controller}")
-    click.echo(f"softhand {__version__} handshake | {who} | partner seed {seed}, hand "
-               f"{ep['partner_size_mm'][0]:g} x {ep['partner_size_mm'][1]:g} mm | timestep "
-               f"{timestep_s * 1e3:g} ms, an env step every {frame_skip * timestep_s * 1e3:g} ms")
+    click.echo(_header("handshake", _sensored_hand(ep["hand"], skins_text,
+                                                   f"controller {controller}"),
+                       f"partner seed {seed}, hand {ep['partner_size_mm'][0]:g} x "
+                       f"{ep['partner_size_mm'][1]:g} mm", f"timestep {timestep_s * 1e3:g} ms, "
+                       f"an env step every {frame_skip * timestep_s * 1e3:g} ms"))
     click.echo(f"partner's grip {summary['partner_grip']['measured_N']:.1f} N against "
                f"{summary['partner_grip']['target_N']:.1f} N (95th percentile error "
                f"{summary['partner_grip']['p95_error_pct']:.0f} %)\n")
@@ -811,6 +812,19 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
 
 #: Upper bound of one handshake's recording: 1.7 MB for the default 2.6 s episode, 5 s at most
 _RECORDING_BYTES = 10e6
+
+
+def _header(command: str, *parts: str) -> str:
+    """The first line of a command that runs handshakes: softhand's version, the command and
+    what it runs, parts separated by ``|``."""
+    return " | ".join((f"softhand {__version__} {command}", *parts))
+
+
+def _sensored_hand(hand: str, skins: str, controllers: str) -> str:
+    """The sensored hand of a header: the paper's relaxed human hand, or the prosthetic hand
+    with its ``skins`` and ``controllers`` (texts)."""
+    return ("the relaxed human hand (the paper's protocol)" if hand == "human"
+            else f"prosthetic hand, {skins}, {controllers}")
 
 
 def _check_gl() -> None:
@@ -890,6 +904,7 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
         --controller neutral --controller force --cluster tcp://HOST:8786"""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.population import run_partner, sample_partners
+    from softhand.envs.skins import DEFAULT_DESIGN
     from softhand.fem.sweep import git_revision
     from softhand.io import atomic_write_text, interrupts_deferred
     from softhand.parallel import run_tasks
@@ -912,13 +927,17 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
         except ValueError as exc:
             bad(str(exc) if design is None else f"--design {design!r}: {exc}")
     partners = sample_partners(n, seed)
-    names = [f"{d or 'pocket2-sil'}-{c}" for d, c in combos]
+    skins = [d or DEFAULT_DESIGN for d in designs]
+    what = f"{n} partners" + (f" x {len(combos)} combinations" if sweep else "")
+    click.echo(_header("population", f"{what}, seed {seed}", _sensored_hand(
+        hand, f"{skins[0]} on every region" if len(skins) == 1 else f"skins {', '.join(skins)}",
+        f"controller{'s' if len(controllers) > 1 else ''} {', '.join(controllers)}")))
+    names = [f"{d}-{c}" for d in skins for c in controllers]
     tasks = [((k, p.index), (p, {"design": d, "controller": c, "hand": hand,
                                  "contact_laws": contact_laws}))
              for k, (d, c) in enumerate(combos) for p in partners]  # a combination's in a row
     done = []
-    with progress_bar(f"{n} partners" + (f" x {len(combos)} combinations" if sweep else ""),
-                      disable=False) as update:
+    with progress_bar(what, disable=False) as update:
         batch = run_tasks(run_partner, tasks, threads=threads, cluster=cluster,
                           on_done=lambda key, ok: (done.append(key),
                                                    update(len(done) / len(tasks))))
@@ -933,7 +952,7 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
             missing.update({str(i): str(e) for (j, i), e in batch.errors.items() if j == k})
             missing_all.update({f"{name}/{i}" if sweep else i: why for i, why in missing.items()})
             meta = {"n": n, "seed": seed, "hand": hand,
-                    "design": "human tissue" if hand == "human" else design or "pocket2-sil",
+                    "design": "human tissue" if hand == "human" else design or DEFAULT_DESIGN,
                     "controller": controller, "contact_laws": contact_laws,
                     "finished": len(results), "missing": missing,
                     "version": __version__, "git_revision": revision, "command": command}
@@ -1031,6 +1050,7 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.physics import DivergenceError
     from softhand.envs.run import run_handshake
+    from softhand.envs.skins import DEFAULT_DESIGN
     from softhand.viz.render import CameraView, SheetFrame, render_sheet, render_state
 
     if design is not None and not design.strip():
@@ -1042,6 +1062,13 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         env = HandshakeEnv(design=design, partner_size=size_mm, hand=hand)
     except ValueError as exc:
         bad(str(exc))
+    when = ("at the end of the grip and mid-shake, 3 views each" if sheet
+            else "at mid-shake" if at_s is None else f"at t = {at_s:g} s")
+    click.echo(_header("render", _sensored_hand(hand, f"{design or DEFAULT_DESIGN} on every "
+                                                "region", f"controller {controller}"),
+                       f"partner seed {seed}" + ("" if size_mm is None else
+                                                 f", hand {size_mm[0]:g} x {size_mm[1]:g} mm"),
+                       when))
     try:
         run = run_handshake(controller=controller, seed=seed, env=env)
     except DivergenceError as exc:  # one line, exit 3 (render runs at the default timestep)
@@ -1090,7 +1117,8 @@ def bench_fe(out_dir, quick) -> None:
     """Time one 3D design (idle and next to CPU load), the sweeps and 2D; errors vs fine mesh."""
     from softhand.bench.fe import run_fe_benchmark
 
-    click.echo(run_fe_benchmark(checked_dir(out_dir, "--out"), quick=quick))
+    click.echo(run_fe_benchmark(checked_dir(out_dir, "--out"), quick=quick,
+                                progress=progress_line))
 
 
 @bench.command("handshake")
@@ -1113,12 +1141,11 @@ def bench_handshake(out_dir, scale, worlds) -> None:
     if scale:
         from softhand.bench.scale import run_scale_benchmark
 
-        click.echo(run_scale_benchmark(out, worlds=counts,
-                                       progress=lambda line: click.echo(line + " ...", err=True)))
+        click.echo(run_scale_benchmark(out, worlds=counts, progress=progress_line))
         return
     from softhand.bench.handshake import run_handshake_benchmark
 
-    click.echo(run_handshake_benchmark(out))
+    click.echo(run_handshake_benchmark(out, progress=progress_line))
 
 
 @bench.command("sensors")
@@ -1137,7 +1164,7 @@ def bench_sensors(out_dir, designs, no_handshake) -> None:
         if d not in DESIGNS:
             bad(f"--design {d!r} is unknown; allowed: {', '.join(DESIGNS)}")
     click.echo(run_sensor_table(out, designs=tuple(dict.fromkeys(designs)) or None,
-                                handshakes=not no_handshake))
+                                handshakes=not no_handshake, progress=progress_line))
 
 
 @bench.command("flex")
@@ -1189,7 +1216,7 @@ def sensors_calibrate(out_dir, designs, fit_only, threads, cluster, force) -> No
             out, "the FE records written before the failure; transfer.json is the old one"):
         if not fit_only:
             _, missing, interrupted = cal.run_sensor_fe(names, staged.path, threads=threads,
-                                                        cluster=cluster)
+                                                        cluster=cluster, progress=progress_line)
             if interrupted:
                 raise Stopped(f"interrupted ({_STOP['by']}): {kept}; missing: "
                               f"{', '.join(missing)}; no law was fitted", EXIT_INTERRUPTED)
@@ -1197,7 +1224,8 @@ def sensors_calibrate(out_dir, designs, fit_only, threads, cluster, force) -> No
                 raise Stopped(f"error: {len(missing)} FE records did not finish "
                               f"({', '.join(missing)}); {kept}; no law was fitted",
                               EXIT_CONVERGENCE)
-        data = cal.fit_all(names, staged.path)  # atomically: Ctrl-C leaves the old file
+        # atomically: Ctrl-C leaves the old file
+        data = cal.fit_all(names, staged.path, progress=progress_line)
         staged.commit()
     for design, per in data["laws"].items():
         errs = ", ".join(f"{v['placement']} {v['fitted'][0]['rms_pct']:.2f}/"
@@ -1221,7 +1249,8 @@ def bench_calibration(out_dir, skins) -> None:
     for s in skins:
         if s not in known:
             bad(f"--skin {s!r} has no shipped calibration; allowed: {', '.join(known)}")
-    click.echo(run_calibration_benchmark(out, skins=list(dict.fromkeys(skins)) or None))
+    click.echo(run_calibration_benchmark(out, skins=list(dict.fromkeys(skins)) or None,
+                                         progress=progress_line))
 
 
 def run() -> None:

@@ -129,6 +129,11 @@ def progress_bar(desc: str, *, disable: bool) -> Iterator[Callable[[float], None
         bar.close()
 
 
+def progress_line(line: str) -> None:
+    """A long command's line on what it starts now, on stderr: stdout stays its report."""
+    click.echo(line + " ...", err=True)
+
+
 # --- FE options -----------------------------------------------------------------------------
 
 _OPT_MESH = click.option("--mesh", type=click.Choice(["coarse", "default", "uniform", "fine"]),

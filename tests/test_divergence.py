@@ -149,7 +149,8 @@ def test_cli_render_reports_a_divergence_as_one_line_and_exit_3(monkeypatch, tmp
     _inject(monkeypatch, "qvel")
     res = CliRunner().invoke(main, ["render", str(tmp_path / "x.png")])
     assert res.exit_code == 3, (res.output, res.exception)
-    line = res.output.strip()
+    assert res.stdout.startswith("softhand ") and res.stdout.count("\n") == 1  # the header
+    line = res.stderr.strip()
     assert "\n" not in line and line.startswith("error: the handshake diverged at t = 0.050 s")
     assert line.endswith("timestep 2 ms; softhand handshake --timestep 0.001 tries a smaller one")
     assert not (tmp_path / "x.png").exists()

@@ -8,6 +8,7 @@ in the same run. Writes ``bench-calibration.{md,json,png}``; timings are reporte
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -39,18 +40,22 @@ def _record(name: str, cal):
 
 
 def run_calibration_benchmark(out_dir: str | Path = REPORTS_DIR, *, skins: list[str] | None = None,
-                              skin_dir: str | Path = SKINS_DIR) -> str:
-    """Run the benchmark, write the report files, return the Markdown."""
+                              skin_dir: str | Path = SKINS_DIR,
+                              progress: Callable[[str], None] | None = None) -> str:
+    """Run the benchmark, write the report files, return the Markdown; ``progress`` gets a line
+    before each skin and representation."""
+    say = progress or (lambda line: None)
     names = skins or shipped_skins(skin_dir)
     if not names:
         raise ValueError(f"no calibrated skins in {skin_dir}: run `softhand calibrate` first")
     settings = RigSettings(mass_kg=CALIBRATION_MASS_KG)
     rows: dict[str, dict[str, Any]] = {}
-    for name in names:
+    for i, name in enumerate(names, 1):
         cal = load_calibration(name, skin_dir)
         curve = _record(name, cal)
         row: dict[str, Any] = {}
         for rep in cal.representations:
+            say(f"skin {name} ({i} of {len(names)}), {rep}")
             if rep == "flex":
                 row[rep] = _flex_row(cal.representations[rep].params, curve)
                 continue

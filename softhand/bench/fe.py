@@ -28,7 +28,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -74,25 +74,33 @@ def _complete(outcome) -> dict:
     return outcome.results
 
 
-def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) -> str:
+def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False,
+                     progress: Callable[[str], None] | None = None) -> str:
     """Run the benchmark, write ``bench-fe.json`` and ``bench-fe.md``, return the Markdown.
 
     ``quick`` skips the 3D fine-mesh references (about 40 min on 2 cores) and keeps those of the
     report already in ``out_dir``, labelled with the git revision that measured them.
+    ``progress`` gets a line before each part (the sweeps also count their designs on stderr).
     """
+    say = progress or (lambda line: None)
     out = Path(out_dir)
     ramp = IndentationSettings(hold_s=0.0)
     machine = machine_info()
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
-    data["engines"] = _engines(repeats=2 if quick else 3)
+    data["engines"] = _engines(repeats=2 if quick else 3, say=say)
+    say("one 3D design (pocket2-sil) to 2 N, ramp")
     one = indent("pocket2-sil", ramp)
+    say("one 3D design (pocket2-sil) to 2 N, ramp + 10 s hold")
     one_hold = indent("pocket2-sil", IndentationSettings())
     data["one_design"] = {"design": "pocket2-sil", "ramp_wall_s": one.wall_s,
                           "ramp_hold_wall_s": one_hold.wall_s, "n_dofs": one.n_dofs}
     n_load = available_cpus()
     with cpu_load(n_load):
+        say(f"the same ramp next to {n_load} busy processes, {default_threads()} threads")
         loaded = indent("pocket2-sil", ramp)
+        say(f"the same ramp next to {n_load} busy processes, 1 thread")
         loaded_1 = indent("pocket2-sil", IndentationSettings(hold_s=0.0, threads=1))
+    say("the same ramp idle, 1 thread")
     idle_1 = indent("pocket2-sil", IndentationSettings(hold_s=0.0, threads=1))
     data["under_load"] = {
         "design": "pocket2-sil", "busy_processes": n_load,
@@ -101,9 +109,11 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
         "one_thread": {"threads": 1, "idle_s": idle_1.wall_s, "loaded_s": loaded_1.wall_s,
                        "ratio": loaded_1.wall_s / idle_1.wall_s},
     }
+    say("12-design sweep, 3D, ramp + hold")
     t0 = time.perf_counter()
     sweep = _complete(run_sweep(DESIGNS, IndentationSettings(), show_progress=True))
     sweep_wall = time.perf_counter() - t0
+    say("12-design sweep, 2D plane strain, ramp + hold")
     t0 = time.perf_counter()
     sweep2d = _complete(run_sweep(DESIGNS, IndentationSettings(mode="2d"), show_progress=True))
     sweep2d_wall = time.perf_counter() - t0
@@ -132,12 +142,14 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
     else:
         for name in REFERENCE_DESIGNS:
             row: dict[str, Any] = {}
+            say(f"mesh convergence, {name}: 3D fine-mesh reference")
             fine = indent(name, IndentationSettings(mesh="fine", hold_s=0.0))
             ref = fine.displacement_at(2.0)
             row["fine"] = {"d2N": ref, "wall_s": fine.wall_s, "n_dofs": fine.n_dofs}
             for label, st in (("coarse", IndentationSettings(mesh="coarse", hold_s=0.0)),
                               ("default", ramp),
                               ("2d", IndentationSettings(mode="2d", hold_s=0.0))):
+                say(f"mesh convergence, {name}: {label}")
                 r = indent(name, st)
                 row[label] = {"d2N": r.displacement_at(2.0), "wall_s": r.wall_s,
                               "n_dofs": r.n_dofs,
@@ -150,16 +162,20 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False) 
     return md
 
 
-def _engines(repeats: int) -> dict[str, Any]:
+def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
     """Reference and compiled engine on pocket2-sil, 3D default mesh, ramp to 2 N and the
-    ramp with the 10 s hold, interleaved ``repeats`` times; median walls."""
+    ramp with the 10 s hold, interleaved ``repeats`` times; median walls. ``say`` gets a line
+    before each run."""
     out: dict[str, Any] = {"design": "pocket2-sil", "repeats": repeats,
                            "threads": default_threads()}
     for label, hold in (("ramp", 0.0), ("ramp_hold", 10.0)):
         walls: dict[str, list[float]] = {"numpy": [], "compiled": []}
         last: dict[str, Any] = {}
-        for _ in range(repeats if label == "ramp" else 1):
+        runs = repeats if label == "ramp" else 1
+        for i in range(runs):
             for engine in ("numpy", "compiled"):
+                say(f"engines on pocket2-sil, {label.replace('_', ' + ')} {i + 1} of {runs}: "
+                    f"{engine}")
                 r = indent("pocket2-sil", IndentationSettings(hold_s=hold, engine=engine))
                 walls[engine].append(r.wall_s)
                 last[engine] = r

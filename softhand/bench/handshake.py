@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -70,8 +71,9 @@ def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
     return best
 
 
-def _timestep_errors() -> dict[str, Any]:
-    """Per controller: the worst, over ERROR_SEEDS, of each timestep's error against the finest."""
+def _timestep_errors(say: Callable[[str], None]) -> dict[str, Any]:
+    """Per controller: the worst, over ERROR_SEEDS, of each timestep's error against the finest;
+    ``say`` gets a line before each seed."""
     *steps, ref_step = TIMESTEPS_S
     out: dict[str, Any] = {}
     for controller in CONTROLLERS:
@@ -79,6 +81,7 @@ def _timestep_errors() -> dict[str, Any]:
                                       "sum_mean_change_pct": 0.0, "same_over_2N": 0}
                  for ts in steps}
         for seed in ERROR_SEEDS:
+            say(f"timestep errors, controller {controller}, seed {seed}")
             ref = run_handshake(controller=controller, seed=seed, timestep_s=ref_step)
             ref_table = ref.table()
             ref_sum = sum(v["mean_N"] for v in ref_table.values())
@@ -98,10 +101,12 @@ def _timestep_errors() -> dict[str, Any]:
     return out
 
 
-def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
+def _sensitivity(skins: tuple[str, ...], controller: str,
+                 say: Callable[[str], None]) -> dict[str, Any]:
     ref = set(paper()["handshake"]["over_2N"])
     out: dict[str, Any] = {}
     for skin in skins:
+        say(f"skins side by side, controller {controller}, {skin}")
         run = run_handshake(design=skin, controller=controller, seed=0)
         table = run.table()
         over = run.over_2n
@@ -118,7 +123,8 @@ def _sensitivity(skins: tuple[str, ...], controller: str) -> dict[str, Any]:
     return out
 
 
-def _representations(designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[str, Any]:
+def _representations(say: Callable[[str], None],
+                     designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[str, Any]:
     """Per design and hand representation: cost per step relative to ``rigid`` (best of REPEATS
     episodes each) and the error against the relaxation reference in the handshake itself.
 
@@ -127,7 +133,8 @@ def _representations(designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[
     hold: the relaxation pad's own force (``pad``), the region's contact force (``contact``), and
     the memoryless soft contact at the same indentation (``soft-contact``). Across runs (same
     partner, seed and controller): each representation's summed mean region force against the
-    relaxation run, and the largest difference of one region's mean force.
+    relaxation run, and the largest difference of one region's mean force. ``say`` gets a line
+    before each representation.
     """
     reps = ("rigid", "soft-contact", "soft-contact+relaxation")
     out: dict[str, Any] = {}
@@ -135,6 +142,7 @@ def _representations(designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[
         rows: dict[str, Any] = {}
         runs = {}
         for rep in reps:
+            say(f"representations on the hand, {design}, {rep}")
             best = None
             for _ in range(REPEATS):
                 run = run_handshake(design=design, representation=rep, seed=0)
@@ -164,18 +172,24 @@ def _representations(designs: tuple[str, ...] = REPRESENTATION_DESIGNS) -> dict[
 
 
 def run_handshake_benchmark(out_dir: str | Path = REPORTS_DIR, *,
-                            skins: tuple[str, ...] = SENSITIVITY_SKINS) -> str:
+                            skins: tuple[str, ...] = SENSITIVITY_SKINS,
+                            progress: Callable[[str], None] | None = None) -> str:
     """Run the benchmark, write ``bench-handshake.json`` and ``bench-handshake.md``, return the
-    Markdown."""
+    Markdown; ``progress`` gets a line before each part."""
+    say = progress or (lambda line: None)
     out = Path(out_dir)
     machine = machine_info()
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
-    data["speed"] = {f"{ts * 1000:g} ms": {"recording_off": _speed(ts, record=False),
-                                          "recording_on": _speed(ts, record=True)}
-                     for ts in TIMESTEPS_S}
-    data["timestep_error"] = _timestep_errors()
-    data["sensitivity"] = {c: _sensitivity(skins, c) for c in ("neutral", "open-loop")}
-    data["representations"] = _representations()
+    data["speed"] = {}
+    for ts in TIMESTEPS_S:
+        row = {}
+        for key, record in (("recording_off", False), ("recording_on", True)):
+            say(f"speed, timestep {ts * 1000:g} ms, {key.replace('_', ' ')}")
+            row[key] = _speed(ts, record=record)
+        data["speed"][f"{ts * 1000:g} ms"] = row
+    data["timestep_error"] = _timestep_errors(say)
+    data["sensitivity"] = {c: _sensitivity(skins, c, say) for c in ("neutral", "open-loop")}
+    data["representations"] = _representations(say)
     atomic_write_json(out / "bench-handshake.json", data)
     md = _markdown(data)
     atomic_write_text(out / "bench-handshake.md", md)

@@ -25,6 +25,7 @@ Written to ``reports/bench-sensors.{json,md,png}``.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -176,17 +177,25 @@ def _handshake(placement: str, controller: str = "neutral", signal: str = "conta
 
 
 def run_sensor_table(out_dir: str | Path = REPORTS_DIR, *, root: str | Path = SENSORS_DIR,
-                     designs: tuple[str, ...] | None = None, handshakes: bool = True) -> str:
-    """Write ``bench-sensors.json``, ``.md`` and ``.png``; return the Markdown."""
+                     designs: tuple[str, ...] | None = None, handshakes: bool = True,
+                     progress: Callable[[str], None] | None = None) -> str:
+    """Write ``bench-sensors.json``, ``.md`` and ``.png``; return the Markdown; ``progress``
+    gets a line before each part and handshake."""
     from softhand.paper import paper
 
+    say = progress or (lambda line: None)
     out = Path(out_dir)
+    say("the design table")
     data: dict[str, Any] = {"machine": machine_info(), "useful": USEFUL,
                             "designs": design_table(root, designs)}
+    say("the transfer curves")
     plot_transfer_curves(root, out / "bench-sensors.png")
     if handshakes:
         data["fig4_regions"] = list(paper()["handshake"]["over_2N"])
-        data["handshake"] = {p: _handshake(p) for p in ("interface", "pocket-floor")}
+        data["handshake"] = {}
+        for placement in ("interface", "pocket-floor"):
+            say(f"handshake, sensors at {placement}")
+            data["handshake"][placement] = _handshake(placement)
         runs = {}
         feeds = (("contact", "contact", "interface", False),
                  ("sensor under the outer layer", "sensor", "interface", False),
@@ -198,6 +207,7 @@ def run_sensor_table(out_dir: str | Path = REPORTS_DIR, *, root: str | Path = SE
                 for label, signal, placement, ideal in feeds:
                     if ctrl == "force" and ideal:
                         continue
+                    say(f"controllers on sensor readings: {design}, {ctrl}, fed {label}")
                     runs[f"{design}, {ctrl}, {label}"] = {
                         "design": design, "controller": ctrl, "signal": signal,
                         "placement": placement, "ideal_electronics": ideal,

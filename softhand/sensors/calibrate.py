@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Callable
 from dataclasses import asdict, replace
 from datetime import datetime, timezone
 from pathlib import Path
@@ -48,16 +49,19 @@ def speed_dir(root: str | Path, speed_mm_s: float) -> Path:
 
 
 def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | None = None,
-                  cluster: str | None = None,
-                  show_progress: bool = True) -> tuple[dict[str, Any], list[str], bool]:
+                  cluster: str | None = None, show_progress: bool = True,
+                  progress: Callable[[str], None] | None = None
+                  ) -> tuple[dict[str, Any], list[str], bool]:
     """Run the FE records of ``designs`` at every speed and write them (each file atomically).
 
-    ``threads`` and ``cluster`` are :func:`softhand.fem.sweep.run_sweep`'s.
+    ``threads`` and ``cluster`` are :func:`softhand.fem.sweep.run_sweep`'s; ``progress`` gets a
+    line before each speed's sweep (whose bar, with ``show_progress``, counts the designs).
 
     Returns:
         (the summary written, the designs x speeds that did not finish: interrupted or failed,
         whether Ctrl-C stopped it).
     """
+    say = progress or (lambda line: None)
     out = Path(out_dir)
     summary_path = out / "fe" / "summary.json"
     try:
@@ -71,7 +75,8 @@ def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | Non
         "settings": json.loads(json.dumps(asdict(FE_SETTINGS), default=str)),
         "speeds_mm_s": list(SPEEDS_MM_S)}
     missing: list[str] = []
-    for speed in SPEEDS_MM_S:
+    for i, speed in enumerate(SPEEDS_MM_S, 1):
+        say(f"FE records at {speed:g} mm/s ({i} of {len(SPEEDS_MM_S)} speeds)")
         batch = run_sweep(designs, replace(FE_SETTINGS, speed_mm_s=speed), threads=threads,
                           cluster=cluster, show_progress=show_progress)
         for name, r in batch.results.items():
@@ -104,8 +109,11 @@ def read_records(root: str | Path, design: str) -> tuple[list[SensorRecord], lis
     return recs[:1], recs[1:]
 
 
-def fit_all(designs: list[str], root: str | Path) -> dict[str, Any]:
-    """Fit every design's transfer laws from ``root/fe`` and write ``root/transfer.json``."""
+def fit_all(designs: list[str], root: str | Path, *,
+            progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Fit every design's transfer laws from ``root/fe`` and write ``root/transfer.json``;
+    ``progress`` gets a line before each design."""
+    say = progress or (lambda line: None)
     root = Path(root)
     fe_summary = json.loads((root / "fe" / "summary.json").read_text(encoding="utf-8"))
     try:  # a subset refits those designs and keeps the others
@@ -115,7 +123,8 @@ def fit_all(designs: list[str], root: str | Path) -> dict[str, Any]:
     except (OSError, ValueError, KeyError, TypeError):
         laws, sha = {}, {}
     sha.update({d: fe_summary["designs"][d].get("sha256") for d in designs})
-    for design in designs:
+    for i, design in enumerate(designs, 1):
+        say(f"transfer laws of {design} ({i} of {len(designs)})")
         fit, val = read_records(root, design)
         laws[design] = {name: fit_transfer(name, fit, val).to_dict()
                         for name in fit[0].readings_N}

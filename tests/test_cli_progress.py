@@ -1,0 +1,209 @@
+"""The command line speaks to people: long commands say on stderr what they start (stdout stays
+the report), and the commands that run handshakes open with a header line. The work itself is
+stood in for: each benchmark's first piece of work raises, so that only the lines said before it
+are checked, and the commands run on stand-in results."""
+
+from __future__ import annotations
+
+import shutil
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from softhand import __version__
+from softhand.cli import main
+from softhand.paper import paper
+from softhand.paths import SENSORS_DIR
+
+
+class _WorkStartedError(Exception):
+    """The stand-in for a benchmark's first piece of work."""
+
+
+def _stop(*args, **kwargs):
+    raise _WorkStartedError
+
+
+# --- the benchmarks: a line before each part, from the first ----------------------------------
+
+def test_bench_fe_says_each_run_before_it(monkeypatch, tmp_path):
+    import softhand.bench.fe as fe
+
+    monkeypatch.setattr(fe, "indent", _stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        fe.run_fe_benchmark(tmp_path, progress=lines.append)
+    assert lines == ["engines on pocket2-sil, ramp 1 of 3: numpy"]
+
+
+def test_bench_calibration_says_each_skin_before_it(monkeypatch, tmp_path):
+    import softhand.bench.calibration as cal
+
+    monkeypatch.setattr(cal, "build_rig", _stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        cal.run_calibration_benchmark(tmp_path, skins=["solid-sil", "pocket2-sil"],
+                                      progress=lines.append)
+    assert lines == ["skin solid-sil (1 of 2), rigid"]
+
+
+def test_bench_handshake_says_each_part_before_it(monkeypatch, tmp_path):
+    import softhand.bench.handshake as hs
+
+    monkeypatch.setattr(hs, "run_handshake", _stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        hs.run_handshake_benchmark(tmp_path, progress=lines.append)
+    assert lines == ["speed, timestep 2 ms, recording off"]
+    lines.clear()  # the later parts, each on its own
+    with pytest.raises(_WorkStartedError):
+        hs._timestep_errors(lines.append)
+    with pytest.raises(_WorkStartedError):
+        hs._sensitivity(("rigid",), "open-loop", lines.append)
+    with pytest.raises(_WorkStartedError):
+        hs._representations(lines.append)
+    assert lines == ["timestep errors, controller neutral, seed 0",
+                     "skins side by side, controller open-loop, rigid",
+                     "representations on the hand, pocket2-sil, rigid"]
+
+
+def test_bench_sensors_says_each_part_before_it(monkeypatch, tmp_path):
+    import softhand.bench.sensors as sensors
+
+    monkeypatch.setattr(sensors, "design_table", lambda root, designs: {})
+    monkeypatch.setattr(sensors, "plot_transfer_curves", lambda root, path: None)
+    monkeypatch.setattr(sensors, "_handshake", _stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        sensors.run_sensor_table(tmp_path, progress=lines.append)
+    assert lines == ["the design table", "the transfer curves", "handshake, sensors at interface"]
+
+
+def test_sensor_calibration_says_each_speed_and_design_before_it(monkeypatch, tmp_path):
+    import softhand.sensors.calibrate as cal
+
+    monkeypatch.setattr(cal, "run_sweep", _stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        cal.run_sensor_fe(["pocket2-sil"], tmp_path, progress=lines.append)
+    (tmp_path / "fe").mkdir(exist_ok=True)
+    shutil.copy(SENSORS_DIR / "fe" / "summary.json", tmp_path / "fe" / "summary.json")
+    monkeypatch.setattr(cal, "read_records", _stop)
+    with pytest.raises(_WorkStartedError):
+        cal.fit_all(["pocket2-sil"], tmp_path, progress=lines.append)
+    assert lines == ["FE records at 0.5 mm/s (1 of 2 speeds)", "transfer laws of pocket2-sil (1 of 1)"]
+
+
+# --- the commands: those lines on stderr, the report alone on stdout --------------------------
+
+@pytest.mark.parametrize("args, module, function", [
+    (["bench", "fe", "--quick"], "softhand.bench.fe", "run_fe_benchmark"),
+    (["bench", "calibration"], "softhand.bench.calibration", "run_calibration_benchmark"),
+    (["bench", "handshake"], "softhand.bench.handshake", "run_handshake_benchmark"),
+    (["bench", "handshake", "--scale"], "softhand.bench.scale", "run_scale_benchmark"),
+    (["bench", "sensors"], "softhand.bench.sensors", "run_sensor_table"),
+])
+def test_bench_commands_print_progress_on_stderr_and_the_report_on_stdout(
+        monkeypatch, tmp_path, args, module, function):
+    import importlib
+
+    def bench(out, *, progress, **kwargs):
+        progress("part one")
+        progress("part two")
+        return "# report\n"
+
+    monkeypatch.setattr(importlib.import_module(module), function, bench)
+    res = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
+    assert res.exit_code == 0, (res.output, res.exception)
+    assert res.stdout == "# report\n\n"
+    assert res.stderr.splitlines() == ["part one ...", "part two ..."]
+
+
+def test_sensors_calibrate_prints_progress_on_stderr(monkeypatch, tmp_path):
+    import softhand.sensors.calibrate as cal
+
+    out = tmp_path / "sensors"
+    shutil.copytree(SENSORS_DIR, out)
+
+    def fit_all(designs, root, *, progress):
+        for design in designs:
+            progress(f"transfer laws of {design}")
+        return {"laws": {}}
+
+    monkeypatch.setattr(cal, "fit_all", fit_all)
+    res = CliRunner().invoke(main, ["sensors", "calibrate", "--fit-only", "--design",
+                                    "pocket2-sil", "--out", str(out)])
+    assert res.exit_code == 0, (res.output, res.exception)
+    assert res.stderr.splitlines() == ["transfer laws of pocket2-sil ..."]
+    assert res.stdout == f"wrote {out / 'transfer.json'}\n"
+
+
+# --- headers: what runs, first, on stdout -----------------------------------------------------
+
+@pytest.fixture
+def stand_in_partners(monkeypatch):
+    """``softhand population`` on stand-in handshakes (in this process with --workers 1)."""
+    import softhand.envs.handshake
+    import softhand.envs.population
+
+    regions = paper()["handshake"]["regions"]
+
+    def handshake(partner, settings):
+        return {"partner": partner.to_dict(), "peak_N": dict.fromkeys(regions, 1.0),
+                "mean_N": dict.fromkeys(regions, 0.5), "over_2N": [],
+                "force_accounting": {"bone_on_bone_peak_N": 0.0},
+                "grip": {"p95_error_pct": 1.0}, "warnings": 0, "wall_s": 0.0}
+
+    monkeypatch.setattr(softhand.envs.population, "run_partner", handshake)
+    monkeypatch.setattr(softhand.envs.handshake, "HandshakeEnv", lambda **kw: None)
+
+
+@pytest.mark.parametrize("args, header", [
+    (["--seed", "3"], "2 partners, seed 3 | prosthetic hand, pocket2-sil on every region, "
+                      "controller neutral"),
+    (["--design", "pocket2-sil", "--design", "solid-pu", "--controller", "neutral",
+      "--controller", "force"],
+     "2 partners x 4 combinations, seed 0 | prosthetic hand, skins pocket2-sil, solid-pu, "
+     "controllers neutral, force"),
+    (["--hand", "human"], "2 partners, seed 0 | the relaxed human hand (the paper's protocol)"),
+])
+def test_population_starts_with_a_header(stand_in_partners, tmp_path, args, header):
+    res = CliRunner().invoke(main, ["population", "--n", "2", "--workers", "1", *args,
+                                    "--out", str(tmp_path / "pop")])
+    assert res.exit_code == 0, (res.output, res.exception)
+    assert res.stdout.splitlines()[0] == f"softhand {__version__} population | {header}"
+    assert "2 partners" in res.stderr  # the progress bar
+
+
+@pytest.mark.parametrize("args, header", [
+    ([], "prosthetic hand, pocket2-sil on every region, controller neutral | partner seed 0 | "
+         "at mid-shake"),
+    (["--design", "solid-pu", "--controller", "force", "--seed", "4", "--at", "1.5",
+      "--partner-size", "180,85"],
+     "prosthetic hand, solid-pu on every region, controller force | partner seed 4, hand "
+     "180 x 85 mm | at t = 1.5 s"),
+    (["--sheet", "--hand", "human"], "the relaxed human hand (the paper's protocol) | partner "
+                                     "seed 0 | at the end of the grip and mid-shake, 3 views each"),
+])
+def test_render_starts_with_a_header(monkeypatch, tmp_path, args, header):
+    import softhand.envs.handshake
+    import softhand.envs.run
+    import softhand.viz.render
+
+    phase = ["reach", "grip", "grip", "shake", "shake", "shake", "release"]
+    run = SimpleNamespace(phase=phase, time_s=np.linspace(0.0, 3.0, len(phase)),
+                          qpos=[None] * len(phase), mocap_pos=[None] * len(phase),
+                          mocap_quat=[None] * len(phase), region_names=[],
+                          region_force_N=np.zeros((len(phase), 0)), model=None)
+    monkeypatch.setattr(softhand.envs.handshake, "HandshakeEnv", lambda **kw: None)
+    monkeypatch.setattr(softhand.envs.run, "run_handshake", lambda **kw: run)
+    monkeypatch.setattr(softhand.viz.render, "render_state", lambda *a, **kw: None)
+    monkeypatch.setattr(softhand.viz.render, "render_sheet", lambda *a, **kw: None)
+    res = CliRunner().invoke(main, ["render", str(tmp_path / "x.png"), *args])
+    assert res.exit_code == 0, (res.output, res.exception)
+    first, *rest = res.stdout.splitlines()
+    assert first == f"softhand {__version__} render | {header}"
+    assert len(rest) == 1 and rest[0].startswith(f"wrote {tmp_path / 'x.png'}")
+
