@@ -19,6 +19,8 @@ DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
 
 
 def main(target_N: float = 2.5, seed: int = 0) -> dict[str, float]:
+    print(f"one handshake (partner seed {seed}, pocket2-sil skins), each digit holding "
+          f"{target_N:g} N; a few seconds ...", flush=True)
     env = gym.make("softhand/Handshake-v0", design="pocket2-sil")
     controller = ForceRegulating(target_N=target_N)
     obs, info = env.reset(seed=seed)

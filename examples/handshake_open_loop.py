@@ -32,6 +32,8 @@ def peaks(design: str, speed: float, seed: int = 0) -> dict[str, float]:
 
 
 def main(speed: float = 0.6) -> dict[str, dict[str, float]]:
+    print("two handshakes, the hand closing open-loop: with rigid shells, then with pocket2-sil "
+          "skins; a few seconds ...", flush=True)
     out = {design: peaks(design, speed) for design in ("rigid", "pocket2-sil")}
     print(f"open-loop closing at {speed:.0%} of full speed; peak force per region (N):")
     print(f"  {'region':8s} {'rigid':>7s} {'pocket2-sil':>12s}")

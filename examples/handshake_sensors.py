@@ -42,6 +42,8 @@ def held_forces(signal: str, placement: str, seed: int = 0) -> dict[str, float]:
 
 
 def main(seed: int = 0) -> dict[str, dict[str, float]]:
+    print(f"{len(RUNS)} handshakes on pocket2-sil, the neutral controller fed: "
+          f"{'; '.join(RUNS)}; a few seconds ...", flush=True)
     out = {label: held_forces(*how, seed=seed) for label, how in RUNS.items()}
     print("force held during the shake per finger (N, true contact force), neutral controller:")
     print(f"{'fed':32s}" + "".join(f"{f:>9s}" for f in FINGERS) + "  Palm1 reading N")
