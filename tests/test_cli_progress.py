@@ -22,8 +22,17 @@ class _WorkStartedError(Exception):
     """The stand-in for a benchmark's first piece of work."""
 
 
-def _stop(*args, **kwargs):
-    raise _WorkStartedError
+def _said_before_work(monkeypatch, module, work: str, run, *args, **kwargs) -> list[str]:
+    """The progress lines ``run(*args, **kwargs)`` says before it first calls ``module.work``
+    (which raises here)."""
+    def stop(*a, **kw):
+        raise _WorkStartedError
+
+    monkeypatch.setattr(module, work, stop)
+    lines: list[str] = []
+    with pytest.raises(_WorkStartedError):
+        run(*args, progress=lines.append, **kwargs)
+    return lines
 
 
 # --- the benchmarks: a line before each part, from the first ----------------------------------
@@ -31,42 +40,31 @@ def _stop(*args, **kwargs):
 def test_bench_fe_says_each_run_before_it(monkeypatch, tmp_path):
     import softhand.bench.fe as fe
 
-    monkeypatch.setattr(fe, "indent", _stop)
-    lines: list[str] = []
-    with pytest.raises(_WorkStartedError):
-        fe.run_fe_benchmark(tmp_path, progress=lines.append)
-    assert lines == ["engines on pocket2-sil, ramp 1 of 3: numpy"]
+    assert _said_before_work(monkeypatch, fe, "indent", fe.run_fe_benchmark, tmp_path) == [
+        "engines on pocket2-sil, ramp 1 of 3: numpy"]
 
 
 def test_bench_calibration_says_each_skin_before_it(monkeypatch, tmp_path):
     import softhand.bench.calibration as cal
 
-    monkeypatch.setattr(cal, "build_rig", _stop)
-    lines: list[str] = []
-    with pytest.raises(_WorkStartedError):
-        cal.run_calibration_benchmark(tmp_path, skins=["solid-sil", "pocket2-sil"],
-                                      progress=lines.append)
-    assert lines == ["skin solid-sil (1 of 2), rigid"]
+    assert _said_before_work(monkeypatch, cal, "build_rig", cal.run_calibration_benchmark,
+                             tmp_path, skins=["solid-sil", "pocket2-sil"]) == [
+        "skin solid-sil (1 of 2), rigid"]
 
 
 def test_bench_handshake_says_each_part_before_it(monkeypatch, tmp_path):
     import softhand.bench.handshake as hs
 
-    monkeypatch.setattr(hs, "run_handshake", _stop)
-    lines: list[str] = []
-    with pytest.raises(_WorkStartedError):
-        hs.run_handshake_benchmark(tmp_path, progress=lines.append)
-    assert lines == ["speed, timestep 2 ms, recording off"]
-    lines.clear()  # the later parts, each on its own
-    with pytest.raises(_WorkStartedError):
-        hs._timestep_errors(lines.append)
-    with pytest.raises(_WorkStartedError):
-        hs._sensitivity(("rigid",), "open-loop", lines.append)
-    with pytest.raises(_WorkStartedError):
-        hs._representations(lines.append)
-    assert lines == ["timestep errors, controller neutral, seed 0",
-                     "skins side by side, controller open-loop, rigid",
-                     "representations on the hand, pocket2-sil, rigid"]
+    said = [_said_before_work(monkeypatch, hs, "run_handshake", hs.run_handshake_benchmark,
+                              tmp_path)]
+    for run, args in ((hs._timestep_errors, ()), (hs._sensitivity, (("rigid",), "open-loop")),
+                      (hs._representations, ())):  # the later parts, each on its own
+        said.append(_said_before_work(monkeypatch, hs, "run_handshake",
+                                      lambda *a, progress, run=run: run(*a, progress), *args))
+    assert said == [["speed, timestep 2 ms, recording off"],
+                    ["timestep errors, controller neutral, seed 0"],
+                    ["skins side by side, controller open-loop, rigid"],
+                    ["representations on the hand, pocket2-sil, rigid"]]
 
 
 def test_bench_sensors_says_each_part_before_it(monkeypatch, tmp_path):
@@ -74,26 +72,20 @@ def test_bench_sensors_says_each_part_before_it(monkeypatch, tmp_path):
 
     monkeypatch.setattr(sensors, "design_table", lambda root, designs: {})
     monkeypatch.setattr(sensors, "plot_transfer_curves", lambda root, path: None)
-    monkeypatch.setattr(sensors, "_handshake", _stop)
-    lines: list[str] = []
-    with pytest.raises(_WorkStartedError):
-        sensors.run_sensor_table(tmp_path, progress=lines.append)
-    assert lines == ["the design table", "the transfer curves", "handshake, sensors at interface"]
+    assert _said_before_work(monkeypatch, sensors, "_handshake", sensors.run_sensor_table,
+                             tmp_path) == [
+        "the design table", "the transfer curves", "handshake, sensors at interface"]
 
 
 def test_sensor_calibration_says_each_speed_and_design_before_it(monkeypatch, tmp_path):
     import softhand.sensors.calibrate as cal
 
-    monkeypatch.setattr(cal, "run_sweep", _stop)
-    lines: list[str] = []
-    with pytest.raises(_WorkStartedError):
-        cal.run_sensor_fe(["pocket2-sil"], tmp_path, progress=lines.append)
+    assert _said_before_work(monkeypatch, cal, "run_sweep", cal.run_sensor_fe, ["pocket2-sil"],
+                             tmp_path) == ["FE records at 0.5 mm/s (1 of 2 speeds)"]
     (tmp_path / "fe").mkdir(exist_ok=True)
     shutil.copy(SENSORS_DIR / "fe" / "summary.json", tmp_path / "fe" / "summary.json")
-    monkeypatch.setattr(cal, "read_records", _stop)
-    with pytest.raises(_WorkStartedError):
-        cal.fit_all(["pocket2-sil"], tmp_path, progress=lines.append)
-    assert lines == ["FE records at 0.5 mm/s (1 of 2 speeds)", "transfer laws of pocket2-sil (1 of 1)"]
+    assert _said_before_work(monkeypatch, cal, "read_records", cal.fit_all, ["pocket2-sil"],
+                             tmp_path) == ["transfer laws of pocket2-sil (1 of 1)"]
 
 
 # --- the commands: those lines on stderr, the report alone on stdout --------------------------
