@@ -296,7 +296,7 @@ def test_pocket_floor_sensor_is_blind_below_its_dead_band():
     ({"sensor_placement": {"Palm9": "bone"}}, ["'Palm9'", "Palm1"]),
     ({"design": "solid-sil", "sensor_placement": "pocket-floor"},
      ["pocket-floor", "solid-sil", "no pocket", "bone, interface"]),
-    ({"observe": "taxels"}, ["'taxels'", "sensor, contact, both"]),
+    ({"observe": "taxels"}, ["'taxels'", "sensor, load, contact, both"]),
     ({"sensor": replace(FLEXIFORCE_A101, latency_s=0.005)}, ["latency_s = 0.005", "0.01 s"]),
 ])
 def test_env_bad_sensor_input_names_the_value(kw, needles):

@@ -5,6 +5,8 @@
 - handshake: ``HandshakeEnv``, the touch env with the handshake scenario;
 - partner: the partner's script and population bounds; population: partners like the paper's 30;
 - vector: ``HandshakeVectorEnv``, W handshakes stepped together (mujoco.batch, softhand.envs.batch);
+- spaces: the name and unit of every action and observation entry, and the docstring's tables;
+- picture: the scene's offscreen picture (``render_mode="rgb_array"``, ``softhand render``);
 - physics, sensing, skins, models, controllers, run: the pieces the env and its runs use.
 
 Importing this package registers ``softhand/Handshake-v0``::

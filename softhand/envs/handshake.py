@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from softhand.envs.picture import CameraView
 from softhand.envs.scenarios.handshake import DEFAULT_REWARD_WEIGHTS, HandshakeScenario
 from softhand.envs.touch import (
     ACTION_PERIOD_S,
@@ -46,30 +47,49 @@ class HandshakeEnv(TwoHandTouchEnv):
     once per action step, its arm every step.
 
     Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
-    (positive closes; the maximum closes a digit from open in about 1 s):
+    (positive closes; 1 = full speed, which closes a digit from open in about 1 s). Each entry's
+    name and unit is in ``env.unwrapped.action_names`` (:mod:`softhand.envs.spaces`):
 
-    ===== ====================================== =====
-    index actuator                               unit
-    ===== ====================================== =====
-    0-3   index, middle, ring, little finger      1 = full closing speed
-    4     thumb flexion                           1 = full closing speed
-    5     thumb rotation (towards opposition)     1 = full speed
-    ===== ====================================== =====
+    ===== ============================================ ===================================
+    index name                                         drives
+    ===== ============================================ ===================================
+    0     speed/pro_index_motor [fraction of max]      index finger
+    1     speed/pro_middle_motor [fraction of max]     middle finger
+    2     speed/pro_ring_motor [fraction of max]       ring finger
+    3     speed/pro_little_motor [fraction of max]     little finger
+    4     speed/pro_thumb_flex_motor [fraction of max] thumb flexion
+    5     speed/pro_thumb_rot_motor [fraction of max]  thumb rotation (towards opposition)
+    ===== ============================================ ===================================
 
     Observation space: ``Box(-inf, inf, (2 n + 19,), float64)`` with n the prosthetic hand's
-    joints (16 by default); ``(2 n + 37,)`` with ``observe="both"``:
+    joints (16 by default); ``(2 n + 37,)`` with ``observe="both"``. Each entry's name and unit
+    is in ``env.unwrapped.observation_names`` (e.g. ``qpos/pro_index_mcp [rad]``,
+    ``sensor_patch/Index1 [N]``, ``episode_fraction [-]``); the 18 region values, in
+    ``region_names`` order, are chosen by ``observe``:
 
-    ================= ====================================================== ======
-    slice             quantity                                                unit
-    ================= ====================================================== ======
-    [0, n)            prosthetic joint positions                             rad
-    [n, 2n)           prosthetic joint velocities                            rad/s
-    [2n, 2n + 18)     per region, in the order above: its embedded sensor's   N
-                      reading (``observe="sensor"``, the default), or its
-                      true normal contact force (``observe="contact"``)
-    [2n + 18, 2n+36)  ``observe="both"`` only: the true contact forces       N
-    last              time since the start / handshake duration              1
-    ================= ====================================================== ======
+    ================== ========================== ================================================
+    slice              name                       quantity
+    ================== ========================== ================================================
+    [0, n)             qpos/<joint> [rad]         prosthetic joint positions, in the model's order
+                                                  (pro_index_mcp, ...; a relaxation pad's slide
+                                                  joints in m)
+    [n, 2n)            qvel/<joint> [rad/s]       prosthetic joint velocities (slides: m/s)
+    [2n, 2n + 18)      sensor_patch/<region> [N]  observe="sensor" (default) or "both": per
+                                                  region, the reading of the region's embedded
+                                                  sensor on its 4 x 4 mm patch, a fraction of the
+                                                  region's load (info["sensor_readings_N"])
+    [2n, 2n + 18)      load_estimate/<region> [N] observe="load": per region, the load a
+                                                  calibrated read-out infers from that reading,
+                                                  the transfer law inverted, 0 inside a pocket's
+                                                  dead band (info["sensor_load_estimate_N"])
+    [2n, 2n + 18)      region_load/<region> [N]   observe="contact": per region, the true normal
+                                                  contact force on the region
+                                                  (info["region_forces_N"])
+    [2n + 18, 2n + 36) region_load/<region> [N]   observe="both": per region, the true normal
+                                                  contact force on the region
+                                                  (info["region_forces_N"])
+    last               episode_fraction [-]       time since the start / handshake duration
+    ================== ========================== ================================================
 
     Embedded sensors (:mod:`softhand.envs.sensing`): each region's sensor sits under its skin at
     ``sensor_placement`` (default ``interface``, under the outer layer; ``bone``;
@@ -183,7 +203,9 @@ class HandshakeEnv(TwoHandTouchEnv):
             :data:`FLEXIFORCE_A101`); the noise is drawn from the episode's seed.
         sensor_placement: one placement for every region (``bone``, ``interface`` or
             ``pocket-floor``), or a mapping region -> placement (the rest ``interface``).
-        observe: ``sensor`` (default), ``contact`` or ``both`` (see the observation space).
+        observe: ``sensor`` (default: the sensor patches' readings), ``load`` (the calibrated
+            read-out's load estimates), ``contact`` (the true region loads) or ``both`` (the
+            readings, then the true loads); see the observation space.
         sensor_dir: folder of ``transfer.json``, a non-empty path (default: the shipped
             ``calibration/sensors``).
         hand: ``prosthetic`` (default) or ``human``: the paper's protocol, the sensored hand as
@@ -200,6 +222,15 @@ class HandshakeEnv(TwoHandTouchEnv):
             its two geoms' shapes (a phalanx or a palm piece, pressed by a finger or a flat;
             :mod:`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate
             protocol. ``env.unwrapped.pair_laws`` names the law of every pair.
+        render_mode: None (default) or ``rgb_array``: :meth:`render` returns the state as an
+            (H, W, 3) uint8 picture, ``softhand render``'s (offscreen ``mujoco.Renderer``; needs
+            ``MUJOCO_GL=egl`` or ``osmesa`` set before mujoco is imported, without a display),
+            one per env step at ``metadata["render_fps"]`` (100 by default), so that Gymnasium's
+            wrappers take it (``RenderCollection``; ``RecordVideo`` with moviepy installed).
+        render_size: (width, height) of the picture, each 64-4096 pixels; default (640, 480).
+        render_view: the camera, a :class:`~softhand.envs.picture.CameraView`; default
+            ``softhand render``'s (``RENDER_VIEW``: azimuth 150 deg, elevation -30 deg, 0.3 m
+            from the hands).
 
     Raises:
         ValueError: at construction, a bad argument or calibration file, naming it, the value
@@ -209,7 +240,8 @@ class HandshakeEnv(TwoHandTouchEnv):
             6 finite real numbers in [-1, 1] (a numpy masked array with masked entries included:
             the data under a mask is arbitrary).
         RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended;
-            :meth:`step` or :meth:`reset` after :meth:`close`.
+            :meth:`step`, :meth:`reset` or :meth:`render` after :meth:`close`; :meth:`render`
+            without a render mode.
 
     Physics: every MuJoCo call of an episode goes through :attr:`physics`
     (:class:`~softhand.envs.physics.MujocoPhysics`), the seam the batched backend implements
@@ -220,7 +252,9 @@ class HandshakeEnv(TwoHandTouchEnv):
     the partner's script, the phases, the reward); another touch is another scenario.
 
     Version history: v0 (softhand 0.1, unreleased): first release; before the release the default
-    timestep went from 1 to 2 ms and the partner's joints got armature (region forces changed).
+    timestep went from 1 to 2 ms and the partner's joints got armature (region forces changed);
+    ``observe="load"``, ``observation_names``, ``action_names`` and ``render_mode="rgb_array"``
+    were added (the default observation is unchanged).
     """
 
     def __init__(self, *, design: str | None = None, skins: Mapping[str, str] | None = None,
@@ -232,7 +266,9 @@ class HandshakeEnv(TwoHandTouchEnv):
                  sensor_placement: str | Mapping[str, str] | None = None,
                  observe: str = "sensor", sensor_dir: str | Path | None = None,
                  partner_size: tuple[float, float] | None = None,
-                 hand: str = "prosthetic", contact_laws: str = "geometry") -> None:
+                 hand: str = "prosthetic", contact_laws: str = "geometry",
+                 render_mode: str | None = None, render_size: tuple[int, int] = (640, 480),
+                 render_view: CameraView | None = None) -> None:
         scenario = HandshakeScenario(squeeze=squeeze, overload_N=overload_N,
                                      reward_weights=reward_weights, randomize=randomize)
         super().__init__(scenario=scenario, design=design, skins=skins,
@@ -240,4 +276,5 @@ class HandshakeEnv(TwoHandTouchEnv):
                          timestep_s=timestep_s, calibration_dir=calibration_dir, sensor=sensor,
                          sensor_placement=sensor_placement, observe=observe,
                          sensor_dir=sensor_dir, partner_size=partner_size, hand=hand,
-                         contact_laws=contact_laws)
+                         contact_laws=contact_laws, render_mode=render_mode,
+                         render_size=render_size, render_view=render_view)

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -18,8 +19,10 @@ from softhand.hands.config import HandConfig
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
 from softhand.sensors.device import ASSUMPTIONS
+from softhand.validate import show
 
-__all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "mean_curvature_radius", "run_handshake"]
+__all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "check_policy",
+           "mean_curvature_radius", "run_handshake", "run_policy"]
 
 OVER_N = REFERENCE_FORCE_N  # the paper's Fig. 4 threshold, 2 N
 #: where the normal force between the two hands comes from (force accounting)
@@ -488,8 +491,9 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                   controller_settings: Mapping[str, float] | None = None,
                   options: Mapping[str, float] | None = None,
                   **env_kwargs) -> HandshakeRun:
-    """Run one episode; keep every ``record_every``-th physics step for the recording (default:
-    the last step of every action, 100 Hz). ``signal`` and ``controller_settings`` go to
+    """Run one episode with a built-in controller (:func:`run_policy`, which keeps every
+    ``record_every``-th physics step for the recording; default: the last step of every action,
+    100 Hz). ``signal`` and ``controller_settings`` go to
     :func:`~softhand.envs.controllers.make_controller`.
 
     ``options`` go to the env's reset (the episode's partner: grip, duration, shake phase).
@@ -500,17 +504,61 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     if env is None:
         env = HandshakeEnv(design=design, skins=skins, **env_kwargs)
     ctrl = make_controller(controller, signal, **dict(controller_settings or {}))
-    record_every = record_every or env.frame_skip
+    about = {"name": controller, "signal": signal if controller != "open-loop" else None,
+             **dict(controller_settings or {})}
+    return run_policy(env, ctrl, seed=seed, options=options, record_every=record_every,
+                      about=about)
+
+
+def check_policy(env: Any, policy: Any) -> HandshakeEnv:
+    """The HandshakeEnv under ``env`` (itself, or the env a Gymnasium wrapper wraps), after
+    checking that ``policy`` can be called.
+
+    Raises:
+        ValueError: ``env`` is not a HandshakeEnv or a wrapper of one, or ``policy`` is not
+            callable, naming the value.
+    """
+    base = getattr(env, "unwrapped", None)
+    if not isinstance(base, HandshakeEnv):
+        raise ValueError(f"env = {show(env)}: expected a softhand HandshakeEnv or a Gymnasium "
+                         "wrapper of one (gymnasium.make('softhand/Handshake-v0'))")
+    if not callable(policy):
+        raise ValueError(f"policy = {show(policy)}: expected a callable policy(obs, info) -> "
+                         "action")
+    return base
+
+
+def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
+               options: Mapping[str, float] | None = None, record_every: int | None = None,
+               about: Mapping[str, Any] | None = None) -> HandshakeRun:
+    """Run one episode of ``env`` with ``policy(obs, info) -> action`` and collect what a user
+    looks at (the :class:`HandshakeRun`: state, forces, readings, contacts and accounting at
+    every ``record_every``-th physics step; default the last of every action, 100 Hz).
+
+    ``env`` is a HandshakeEnv or a Gymnasium wrapper of one: the episode steps through the
+    wrappers (the policy gets their observation), the state is read from the HandshakeEnv.
+    ``seed`` and ``options`` go to its reset. ``about`` is what the run's ``controller`` says
+    (default: the policy's name).
+
+    Raises:
+        ValueError: a bad ``env`` or ``policy`` (:func:`check_policy`), before any work; a bad
+            seed, option or action as the env's reset and step say.
+        DivergenceError: the physics diverged.
+    """
+    base = check_policy(env, policy)
+    if about is None:
+        about = {"name": getattr(policy, "__name__", type(policy).__name__)}
+    record_every = record_every or base.frame_skip
     obs, info = env.reset(seed=seed, options=options)
-    m, d = env.model, env.data
-    zones = [m.site(f"pro_touch_{r}").id for r in env.region_names]
-    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], pair_laws(env), zones)
+    m, d = base.model, base.data
+    zones = [m.site(f"pro_touch_{r}").id for r in base.region_names]
+    areas = ContactAreas(m, [m.geom(g).id for g in base.region_geoms], pair_laws(base), zones)
     palms = [np.array([m.geom(f"{prefix}{p}").id for p in pieces]) for prefix, pieces in
              (("pro_skin_", PALM_PIECES["prosthetic"]), ("hum_tissue_", PALM_PIECES["partner"]))]
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
                                                 "acc", "sf", "pf", "s", "g", "pp")}
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
-                  for g in env.region_geoms]
+                  for g in base.region_geoms]
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
     pad_dofs = np.array([m.jnt_dofadr[j] if j >= 0 else 0 for j in pad_joints])
     has_pads = bool((pads >= 0).any())
@@ -518,16 +566,16 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
     while True:
         t0 = time.perf_counter()
         with mujoco_warnings_kept():  # a divergence is raised below, not printed by MuJoCo
-            obs, _, term, trunc, info = env.step(ctrl(obs, info))
+            obs, _, term, trunc, info = env.step(policy(obs, info))
         wall += time.perf_counter() - t0
-        steps += env.frame_skip
+        steps += base.frame_skip
         if steps % record_every == 0 or term or trunc:
             frames["t"].append(d.time)
             frames["q"].append(d.qpos.copy())
             frames["mp"].append(d.mocap_pos.copy())
             frames["mq"].append(d.mocap_quat.copy())
-            frames["f"].append([info["region_forces_N"][r] for r in env.region_names])
-            frames["s"].append([info["sensor_readings_N"][r] for r in env.region_names])
+            frames["f"].append([info["region_forces_N"][r] for r in base.region_names])
+            frames["s"].append([info["sensor_readings_N"][r] for r in base.region_names])
             frames["ph"].append(info["phase"])
             frames["g"].append((info["partner_grip_measured_N"], info["partner_grip_N"]))
             frames["pp"].append(_palm_to_palm(d, *palms))
@@ -544,25 +592,23 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
             frames["pf"].append(-d.qfrc_passive[pad_dofs])  # the pad's push on its skin
         if term or trunc:
             break
-    if term:
-        raise DivergenceError(env.physics.divergence, skins=env.skins,
-                              representations=env.representations,
+    if term and info.get("unstable"):
+        raise DivergenceError(base.physics.divergence, skins=base.skins,
+                              representations=base.representations,
                               timestep_s=float(m.opt.timestep))
     q = np.array(frames["q"])
     compression = np.where(pads >= 0, 1e3 * q[:, np.maximum(pads, 0)], np.nan)
-    return HandshakeRun(env.region_names, dict(env.skins), np.array(frames["t"]), q,
+    return HandshakeRun(base.region_names, dict(base.skins), np.array(frames["t"]), q,
                         np.array(frames["mp"]), np.array(frames["mq"]), np.array(frames["f"]),
                         frames["c"], frames["ph"], wall, steps, m, np.array(frames["a"]),
                         np.array(frames["r"]), np.array(frames["acc"]), np.array(frames["sf"]),
                         compression if has_pads else None,
                         np.array(frames["pf"]) if has_pads else None,
-                        dict(env.representations), env.calibration_dir,
-                        np.array(frames["s"]), dict(env.sensor_placements),
-                        env.sensors.spec.to_dict(),
-                        {"name": controller, "signal": signal if controller != "open-loop" else
-                         None, **dict(controller_settings or {})},
+                        dict(base.representations), base.calibration_dir,
+                        np.array(frames["s"]), dict(base.sensor_placements),
+                        base.sensors.spec.to_dict(), dict(about),
                         np.array(frames["g"]), np.array(frames["pp"]),
-                        {"hand": env.hand, "partner_size_mm": list(env.partner_size_mm),
+                        {"hand": base.hand, "partner_size_mm": list(base.partner_size_mm),
                          "seed": seed, "options": dict(options or {}),
                          "softhand_version": __version__},
-                        tuple(law_labels(env)), env.contact_laws)
+                        tuple(law_labels(base)), base.contact_laws)

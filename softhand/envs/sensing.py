@@ -22,12 +22,10 @@ from softhand.paths import SENSORS_DIR
 from softhand.sensors.calibrate import load_transfer_laws
 from softhand.sensors.transfer import TransferLaw
 
-__all__ = ["DEFAULT_PLACEMENT", "OBSERVE", "SURFACE", "parse_placements", "region_laws"]
+__all__ = ["DEFAULT_PLACEMENT", "SURFACE", "parse_placements", "region_laws"]
 
 DEFAULT_PLACEMENT = "interface"
 SURFACE = "surface"  # an ideal sensor on the surface of a skin without FE model
-#: what the observation's region slice carries
-OBSERVE = ("sensor", "contact", "both")
 
 
 @lru_cache(maxsize=8)

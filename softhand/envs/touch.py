@@ -23,8 +23,9 @@ from gymnasium import spaces
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import check_partner_size, check_reset_options
 from softhand.envs.physics import MujocoPhysics
+from softhand.envs.picture import RENDER_VIEW, CameraView, ScenePicture, check_size, posed_data
 from softhand.envs.scenario import Scenario
-from softhand.envs.sensing import OBSERVE, parse_placements, region_laws
+from softhand.envs.sensing import parse_placements, region_laws
 from softhand.envs.skins import (
     CalibratedRangeWarning,
     check_contact_laws,
@@ -34,6 +35,7 @@ from softhand.envs.skins import (
     series_law,
     skin_of_pair,
 )
+from softhand.envs.spaces import OBSERVE, action_names, observation_names, region_values
 from softhand.hands import SceneConfig, partner_actuators, prosthetic_actuators, regions
 from softhand.hands.config import TIMESTEP_RANGE_S, HandConfig, PartnerConfig, ProstheticConfig
 from softhand.hands.partner import PARTNER_JOINTS
@@ -45,7 +47,7 @@ from softhand.validate import check_number, check_path, show
 from softhand.warn import warn_at_caller
 
 __all__ = ["ACTION_PERIOD_S", "DEFAULT_TIMESTEP_S", "HANDS", "MAX_ACTION_PERIOD_S",
-           "TwoHandTouchEnv", "default_frame_skip"]
+           "RENDER_MODES", "TwoHandTouchEnv", "default_frame_skip"]
 
 ACTION_PERIOD_S = 0.01  # default action period: 100 Hz
 MAX_ACTION_PERIOD_S = 0.1  # slowest action rate allowed (10 Hz): frame_skip x timestep_s
@@ -69,6 +71,8 @@ DEFAULT_TIMESTEP_S = SceneConfig.timestep_s
 #: paper's experimenter's relaxed human hand (human tissue on every region, soft joint
 #: impedance, a neutral grip that waits for the partner; the action is not used).
 HANDS = ("prosthetic", "human")
+#: Gymnasium render modes: an (H, W, 3) uint8 picture of the state, ``softhand render``'s.
+RENDER_MODES = ("rgb_array",)
 
 
 class TwoHandTouchEnv(gym.Env):
@@ -78,7 +82,7 @@ class TwoHandTouchEnv(gym.Env):
     is the touch (a :class:`~softhand.envs.scenario.Scenario`).
     """
 
-    metadata: ClassVar[dict] = {"render_modes": [], "render_fps": 100}
+    metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES), "render_fps": 100}
 
     def __init__(self, *, scenario: Scenario, design: str | None = None,
                  skins: Mapping[str, str] | None = None, representation: str | None = None,
@@ -87,13 +91,19 @@ class TwoHandTouchEnv(gym.Env):
                  sensor_placement: str | Mapping[str, str] | None = None,
                  observe: str = "sensor", sensor_dir: str | Path | None = None,
                  partner_size: tuple[float, float] | None = None,
-                 hand: str = "prosthetic", contact_laws: str = "geometry") -> None:
+                 hand: str = "prosthetic", contact_laws: str = "geometry",
+                 render_mode: str | None = None, render_size: tuple[int, int] = (640, 480),
+                 render_view: CameraView | None = None) -> None:
         # every argument (and every calibration file used) is checked before any work is done
         if not isinstance(scenario, Scenario):
             raise ValueError(f"scenario = {show(scenario)}: expected a softhand.envs.scenario."
                              "Scenario")
+        if not isinstance(observe, str) or observe not in OBSERVE:
+            raise ValueError(f"observe = {show(observe)}: allowed {', '.join(OBSERVE)}")
+        self._check_render(render_mode, render_size, render_view)
         self.scenario = scenario
         self._closed = False
+        self._picture: ScenePicture | None = None  # the renderer, made at the first render()
         #: which laws the skin pairs take (softhand.envs.skins.CONTACT_LAWS)
         self.contact_laws = check_contact_laws(contact_laws)
         # folders: None is the shipped one; an empty string is refused, not taken as the default
@@ -129,9 +139,10 @@ class TwoHandTouchEnv(gym.Env):
         else:
             self.skins, self.representations = parse_skins(design, skins, representation)
         self.frame_skip = int(frame_skip)
-        if observe not in OBSERVE:
-            raise ValueError(f"observe = {show(observe)}: allowed {', '.join(OBSERVE)}")
         self.observe = observe
+        # frames per second of a rendered episode: one picture per env step
+        self.metadata = {**self.metadata,
+                         "render_fps": round(1.0 / (self.frame_skip * timestep_s))}
         spec = FLEXIFORCE_A101 if sensor is None else sensor
         if not isinstance(spec, SensorSpec):
             raise ValueError(f"sensor = {show(sensor)}: expected a SensorSpec")
@@ -193,9 +204,15 @@ class TwoHandTouchEnv(gym.Env):
             self._range[g1, g2] = self._range[g2, g1] = top
             self._pair_name[(min(g1, g2), max(g1, g2))] = name
         self._reset_range_counts()
-        n = self._pro_joints.size
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
-        self._n_obs = 2 * n + 19 + (18 if observe == "both" else 0)
+        kinds = {int(mujoco.mjtJoint.mjJNT_HINGE): "hinge",
+                 int(mujoco.mjtJoint.mjJNT_SLIDE): "slide"}
+        #: the name and unit of every action and observation entry (softhand.envs.spaces)
+        self.action_names = action_names()
+        self.observation_names = observation_names(
+            [(m.joint(j).name, kinds[int(m.jnt_type[j])]) for j in self._pro_joints],
+            self.region_names, observe)
+        self._n_obs = len(self.observation_names)
         self.observation_space = spaces.Box(-np.inf, np.inf, (self._n_obs,), np.float64)
         #: the sensored hand's drives pre-shaped before each episode (the scenario's)
         self._preset = scenario.prepare(self)
@@ -231,6 +248,7 @@ class TwoHandTouchEnv(gym.Env):
         # the sensors' noise: its own stream, drawn after the partner's (which it leaves as is)
         self.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
         self._readings = self.sensors.reading
+        self._estimate = self.sensors.bank.load_estimate(self._readings)
         self._saturated = 0
         self._reset_range_counts()
         self._planned = True
@@ -282,6 +300,7 @@ class TwoHandTouchEnv(gym.Env):
         if not unstable:  # a diverged step keeps the last good forces and readings
             self._forces, self._bone = physics.region_forces()
             self._readings = self.sensors.step(self._forces)
+            self._estimate = self.sensors.bank.load_estimate(self._readings)
             self._saturated = physics.saturated_sensors()
             self._check_range(*physics.contacts_above(self._range), physics.time)
         d = self.data
@@ -312,12 +331,51 @@ class TwoHandTouchEnv(gym.Env):
         if getattr(self, "_planned", False) and self._ended is None:
             self._warn_range(self._range_summary(), "cut short by close()")
         self._closed = True
+        if self._picture is not None:
+            self._picture.close()
         super().close()
+
+    def render(self) -> np.ndarray:
+        """The current state as an (H, W, 3) uint8 picture (``render_mode="rgb_array"``),
+        ``render_size`` (W, H) pixels from ``render_view``: ``softhand render``'s picture, made
+        by the same code (:class:`~softhand.envs.picture.ScenePicture`), without its caption.
+        The renderer is made at the first call and freed by :meth:`close`; it draws a copy of
+        the state, so rendering never changes the episode.
+
+        Raises:
+            RuntimeError: the env was made without a render mode, or is closed.
+        """
+        self._check_open()
+        if self.render_mode is None:
+            raise RuntimeError("render() needs a render mode: make the env with "
+                               "render_mode='rgb_array'")
+        if self._picture is None:
+            self._picture = ScenePicture(self.model, *self.render_size)
+            self._picture_data = mujoco.MjData(self.model)
+        d = self.data
+        state = posed_data(self.model, d.qpos, d.mocap_pos, d.mocap_quat, self._picture_data)
+        return self._picture.draw(state, self.render_view)
 
     # --- helpers -----------------------------------------------------------------------------
     def _check_open(self) -> None:
         if self._closed:
             raise RuntimeError("the env is closed (close() was called): make a new env")
+
+    def _check_render(self, mode: str | None, size: tuple[int, int],
+                      view: CameraView | None) -> None:
+        """Check and keep the render keywords (before any work, as every keyword)."""
+        if mode is not None and (not isinstance(mode, str) or mode not in RENDER_MODES):
+            raise ValueError(f"render_mode = {show(mode)}: allowed None or "
+                             f"{', '.join(map(repr, RENDER_MODES))}")
+        if isinstance(size, (str, bytes)) or not hasattr(size, "__len__") or len(size) != 2:
+            raise ValueError(f"render_size = {show(size)}: expected (width, height) in pixels")
+        check_size(*size)
+        if view is not None and not isinstance(view, CameraView):
+            raise ValueError(f"render_view = {show(view)}: expected None or a "
+                             "softhand.envs.picture.CameraView")
+        self.render_mode = mode
+        self.render_size = (int(size[0]), int(size[1]))
+        self.render_view = RENDER_VIEW if view is None else view
 
     def _reset_range_counts(self) -> None:
         """Zero the episode's counts of contacts beyond their calibrated range."""
@@ -395,15 +453,15 @@ class TwoHandTouchEnv(gym.Env):
         obs = np.empty(self._n_obs)
         obs[:n] = self._qpos[self._pro_qpos]
         obs[n:2 * n] = self._qvel[self._pro_dof]
-        obs[2 * n:2 * n + 18] = self._forces if self.observe == "contact" else self._readings
-        if self.observe == "both":
-            obs[2 * n + 18:2 * n + 36] = self._forces
+        obs[2 * n:-1] = region_values(self.observe, {
+            "sensor_patch": self._readings, "region_load": self._forces,
+            "load_estimate": self._estimate})
         obs[-1] = self.data.time / self.scenario.duration_s
         return obs
 
     def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:
         names = self.region_names
-        estimate = self.sensors.bank.load_estimate(self._readings)
+        estimate = self._estimate
         return {"region_forces_N": dict(zip(names, self._forces.tolist(), strict=True)),
                 "sensor_readings_N": dict(zip(names, self._readings.tolist(), strict=True)),
                 "sensor_load_estimate_N": dict(zip(names, estimate.tolist(), strict=True)),

@@ -61,6 +61,7 @@ from softhand.envs.batch import BatchPhysics
 from softhand.envs.handshake import HandshakeEnv
 from softhand.envs.partner import PHASES, check_reset_options
 from softhand.envs.scenarios.handshake import HandshakeWorlds
+from softhand.envs.spaces import region_values
 from softhand.envs.touch import mount_path
 from softhand.validate import show
 
@@ -181,14 +182,23 @@ class HandshakeVectorEnv(VectorEnv):
                                  f"{e.model.opt.timestep:g} s differs from world 0's "
                                  f"({first.frame_skip} x {first.model.opt.timestep:g} s): the "
                                  "worlds of a vector env share their action period")
-            if e.observation_space.shape != first.observation_space.shape:
-                raise ValueError(f"world {i}: observation shape {e.observation_space.shape} "
-                                 f"differs from world 0's {first.observation_space.shape} "
-                                 "(observe, hand)")
+            mine, theirs = e.observation_names, first.observation_names
+            if mine != theirs:
+                k = next((k for k, (a, b) in enumerate(zip(mine, theirs, strict=False))
+                          if a != b),
+                         min(len(mine), len(theirs)))
+                raise ValueError(
+                    f"world {i}: observation of {len(mine)} entries differs from world 0's "
+                    f"({len(theirs)}) at entry {k}: {mine[k] if k < len(mine) else None!r} "
+                    f"against {theirs[k] if k < len(theirs) else None!r} (observe, hand, "
+                    "representation): the worlds of a vector env share their observation")
         self.region_names = first.region_names
         self.frame_skip = first.frame_skip
         self.single_action_space = first.action_space
         self.single_observation_space = first.observation_space
+        #: the name and unit of each entry of a world's action and observation (the single env's)
+        self.single_action_names = first.action_names
+        self.single_observation_names = first.observation_names
         self.action_space = batch_space(self.single_action_space, n)
         self.observation_space = batch_space(self.single_observation_space, n)
         #: the worlds' physics, one mujoco.batch per model layout (softhand.envs.batch)
@@ -214,6 +224,7 @@ class HandshakeVectorEnv(VectorEnv):
         self._forces = np.zeros((n, len(self.region_names)))
         self._bone = np.zeros_like(self._forces)
         self._readings = np.zeros_like(self._forces)
+        self._estimate = np.zeros_like(self._forces)
         self._saturated = np.zeros(n, int)
         self._worlds: HandshakeWorlds | None = None
         #: worlds whose episode ended and that wait for a reset (AutoresetMode.DISABLED)
@@ -276,6 +287,7 @@ class HandshakeVectorEnv(VectorEnv):
             env = self.envs[w]
             self._forces[w], self._bone[w], self._saturated[w] = forces[w], bone[w], saturated[w]
             self._readings[w] = env.sensors.step(forces[w])
+            self._estimate[w] = env.sensors.bank.load_estimate(self._readings[w])
             env._bone = bone[w]
             env._check_range(*phys.contacts_above(int(w), env._range), float(now[w]))
         time_s = np.array([d.time_s if d is not None else now[w]
@@ -339,6 +351,7 @@ class HandshakeVectorEnv(VectorEnv):
             self._step_index[w] = 0
             env.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
             self._readings[w] = env.sensors.reading
+            self._estimate[w] = env.sensors.bank.load_estimate(self._readings[w])
             self._forces[w] = self._bone[w] = 0.0
             self._saturated[w] = 0
             env._bone = self._bone[w]
@@ -365,20 +378,18 @@ class HandshakeVectorEnv(VectorEnv):
         obs = np.empty((self.num_envs, e._n_obs))
         obs[:, :n] = self.physics.qpos(self._pro_qpos)
         obs[:, n:2 * n] = self.physics.qvel(self._pro_dof)
-        obs[:, 2 * n:2 * n + 18] = self._forces if e.observe == "contact" else self._readings
-        if e.observe == "both":
-            obs[:, 2 * n + 18:2 * n + 36] = self._forces
+        obs[:, 2 * n:-1] = region_values(e.observe, {
+            "sensor_patch": self._readings, "region_load": self._forces,
+            "load_estimate": self._estimate})
         obs[:, -1] = self.physics.time / self._duration
         return obs
 
     def _info(self, terms: dict[str, np.ndarray],
               time_s: np.ndarray | None = None) -> dict[str, Any]:
-        estimate = np.array([e.sensors.bank.load_estimate(r)
-                             for e, r in zip(self.envs, self._readings, strict=True)])
         script = self._worlds.script
         return {"region_forces_N": self._forces.copy(),
                 "sensor_readings_N": self._readings.copy(),
-                "sensor_load_estimate_N": estimate,
+                "sensor_load_estimate_N": self._estimate.copy(),
                 "phase": np.array([PHASES[i] for i in self._phase], dtype=object),
                 "reward_terms": terms,
                 "time_s": self.physics.time if time_s is None else time_s,

@@ -124,6 +124,14 @@ class HandshakeFrames:
     sensor_reading_N: np.ndarray | None = None
     sensor_placements: dict[str, str] | None = None
 
+    @classmethod
+    def from_run(cls, run: Any) -> HandshakeFrames:
+        """What a recording of a run holds: a :class:`softhand.envs.run.HandshakeRun` (or
+        anything with its fields), frame by frame."""
+        return cls(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat, run.region_force_N,
+                   run.region_names, run.skins, run.contacts, run.phase, run.sensor_reading_N,
+                   run.sensor_placements)
+
     def __post_init__(self) -> None:
         time_s = _checked("time_s", self.time_s, (None,))
         n, steps = time_s.size, np.diff(time_s)
