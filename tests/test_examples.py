@@ -26,6 +26,20 @@ def test_fe_indent_example(capsys):
     assert "pocket2-sil" in capsys.readouterr().out
 
 
+def test_fe_indent_example_says_first_what_it_runs(monkeypatch, capsys):
+    """Before its minute of 3D work (stood in for here) the example says how long it takes and
+    that 2D is stiffer than 3D by design, then names each design before indenting it."""
+    module = _load("fe_indent")
+    summary = {"displacement_at_1N_mm": 0.4, "displacement_at_2N_mm": 0.8,
+               "relaxed_force_N": 1.9, "peak_force_N": 2.0}
+    monkeypatch.setattr(module, "indent",
+                        lambda design, settings: type("R", (), {"summary": lambda self: summary})())
+    module.main("3d")
+    lines = capsys.readouterr().out.splitlines()
+    assert "about a minute" in lines[0] and "2D is stiffer than 3D by design" in lines[0]
+    assert lines[1] == "solid-sil (1 of 2) ..." and lines[3] == "pocket2-sil (2 of 2) ..."
+
+
 def test_skin_in_mujoco_example(capsys):
     """Calibrated skins give the FE force within 3 % of 2 N; rigid contact is far off."""
     out = _load("skin_in_mujoco").main("pocket2-sil")
@@ -48,7 +62,8 @@ def test_handshake_force_regulating_example(capsys):
     assert len(touching) >= 2, out
     assert all(v == pytest.approx(2.5, rel=0.3) for v in touching), out
     assert all(v < 2 * 2.5 for v in out.values())
-    assert "held during the shake" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert text.startswith("one handshake") and "held during the shake" in text
 
 
 def test_handshake_open_loop_example(capsys):
@@ -59,7 +74,8 @@ def test_handshake_open_loop_example(capsys):
     for design in ("rigid", "pocket2-sil"):
         assert max(out[design][r] for r in ("Palm1", "Palm2", "Thumb1", "Thumb2")) > 2.0
     assert out["rigid"] != out["pocket2-sil"]
-    assert "> 2 N" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert text.startswith("two handshakes") and "> 2 N" in text
 
 
 def test_handshake_sensors_example(capsys):
@@ -71,4 +87,19 @@ def test_handshake_sensors_example(capsys):
     contact, floor = out["contact"], out["sensor on the pocket floor"]
     assert floor["Index"] + floor["Middle"] > contact["Index"] + contact["Middle"] + 0.3
     assert out["sensor under the outer layer"]["Palm1 reading"] > 1.0
-    assert "force held during the shake" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert text.startswith("3 handshakes") and "force held during the shake" in text
+
+
+def test_hold_2n_example(capsys):
+    """A proportional controller written from the quickstart alone, on the load estimates
+    (observe="load"), holds 2 N on each finger's middle phalanx during the shake: measured
+    (pocket2-sil, seed 0) means 2.00-2.04 N; Index2 1.79-2.22 N, Little2 1.20-2.53 N, while
+    Middle2 and Ring2 swing 0.9-3.5 N with the partner's 4 Hz shake (as on the true loads)."""
+    out = _load("hold_2n").main(2.0)
+    assert set(out) == {"Index2", "Middle2", "Ring2", "Little2"}
+    for region, v in out.items():
+        assert v["mean_N"] == pytest.approx(2.0, abs=0.15), (region, v)
+        assert v["min_N"] > 0.5 and v["max_N"] < 4.0, (region, v)
+    assert out["Index2"]["within_0.5N_pct"] > 90 and out["Little2"]["within_0.5N_pct"] > 75
+    assert "true load held during the shake" in capsys.readouterr().out

@@ -11,7 +11,8 @@ Three jobs, each so that a number on a page is read from the file that measured 
 - A line ``<!-- softhand:NAME -->`` is replaced by a table generated from the shipped data or a
   report at build time (``GENERATED`` lists them): the paper comparison from
   ``calibration/fe/summary.json``, the lifelike ranking from ``calibration/skins/index.json``, the
-  population from ``reports/population-*.json``, the command reference from the CLI itself.
+  population from ``reports/population-*.json``, the command reference from the CLI itself, the
+  env's action and observation tables from ``softhand.envs.spaces`` (the names the env gives).
 """
 
 from __future__ import annotations
@@ -236,6 +237,16 @@ def _cli() -> str:
     return "\n".join(parts)
 
 
+def _actions() -> str:
+    from softhand.envs.spaces import action_table
+    return action_table(markdown=True) + "\n\n*Generated from `softhand.envs.spaces`.*"
+
+
+def _observations() -> str:
+    from softhand.envs.spaces import observation_table
+    return observation_table(markdown=True) + "\n\n*Generated from `softhand.envs.spaces`.*"
+
+
 GENERATED: dict[str, Callable[[], str]] = {
     "paper-agreement": _paper_agreement,
     "paper-details": _paper_details,
@@ -243,6 +254,8 @@ GENERATED: dict[str, Callable[[], str]] = {
     "skin-laws": _skin_laws,
     "population": _population,
     "cli": _cli,
+    "actions": _actions,
+    "observations": _observations,
 }
 _MARKER = re.compile(r"^<!-- softhand:(?P<name>[a-z-]+) -->$", re.MULTILINE)
 
