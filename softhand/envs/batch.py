@@ -75,9 +75,14 @@ class _Group:
         self.mocap_pos, self.mocap_quat = b.bind("mocap_pos"), b.bind("mocap_quat")
         self.sensordata = b.bind("sensordata")
         self.scratch = mujoco.MjData(models[0])  # get_data's target (a new MjData costs ~1 ms)
+        self.sensors_on = True  # the models as compiled
 
     def sensors(self, on: bool) -> None:
-        """Sensors computed (on) or skipped by the next steps; they do not act on the dynamics."""
+        """Sensors computed (on) or skipped by the next steps; they do not act on the dynamics.
+        Only a change touches the models (mjb_setModels copies the batch's model pointers)."""
+        if on == self.sensors_on:
+            return
+        self.sensors_on = on
         for m in self.distinct:
             flags = m.opt.disableflags
             m.opt.disableflags = flags & ~_NO_SENSORS if on else flags | _NO_SENSORS
@@ -181,33 +186,35 @@ class BatchPhysics:
         live = np.asarray(live, bool).copy()
         self.divergence = [None] * self.num_worlds
         last_good = self.time
-        for i in range(self.frame_skip):
-            last = i == self.frame_skip - 1
+        try:
+            for i in range(self.frame_skip):
+                last = i == self.frame_skip - 1
+                for g in self.groups:
+                    ids = np.flatnonzero(live[g.worlds])
+                    if not ids.size:
+                        continue
+                    worlds = g.worlds[ids]
+                    g.mocap_pos[ids, self._mocap[worlds]] = mount_paths[worlds, i]
+                    t = g.time[ids].copy()
+                    last_good[worlds] = t
+                    g.sensors(on=last)  # off for the frame's first steps, on for its last
+                    try:
+                        g.batch.step(ids)
+                    except mjbatch.SimulationError as exc:  # MuJoCo raised an error in these worlds
+                        for j in exc.ids:
+                            w = int(g.worlds[j])
+                            self.divergence[w] = Divergence(float(last_good[w]),
+                                                            f"MuJoCo error: {g.batch.error(j)}")
+                            live[w] = False
+                    reset = g.time[ids] < t + 0.5 * self._timestep[worlds]  # MuJoCo reset the data
+                    for j, w in zip(ids[reset], worlds[reset], strict=True):
+                        if live[w]:
+                            self.divergence[w] = diagnose(
+                                self.models[w], self.data(int(g.worlds[j])), float(last_good[w]))
+                            live[w] = False
+        finally:
             for g in self.groups:
-                ids = np.flatnonzero(live[g.worlds])
-                if not ids.size:
-                    continue
-                worlds = g.worlds[ids]
-                g.mocap_pos[ids, self._mocap[worlds]] = mount_paths[worlds, i]
-                t = g.time[ids].copy()
-                last_good[worlds] = t
-                g.sensors(on=last)
-                try:
-                    g.batch.step(ids)
-                except mjbatch.SimulationError as exc:  # MuJoCo raised an error in these worlds
-                    for j in exc.ids:
-                        w = int(g.worlds[j])
-                        self.divergence[w] = Divergence(float(last_good[w]),
-                                                        f"MuJoCo error: {g.batch.error(j)}")
-                        live[w] = False
-                finally:
-                    g.sensors(on=True)
-                reset = g.time[ids] < t + 0.5 * self._timestep[worlds]  # MuJoCo reset the data
-                for j, w in zip(ids[reset], worlds[reset], strict=True):
-                    if live[w]:
-                        self.divergence[w] = diagnose(self.models[w], self.data(int(g.worlds[j])),
-                                                      float(last_good[w]))
-                        live[w] = False
+                g.sensors(on=True)  # as compiled, whatever stopped the frame
         for g in self.groups:  # MuJoCo's warnings, and a non-finite state the last step made
             ids = np.flatnonzero(live[g.worlds])
             if not ids.size:
