@@ -122,6 +122,17 @@ def test_readme_skin_table_is_the_reports():
     assert name.startswith("prosthetic-102l") and distance == f"{commercial['distance_pct']:.0f}"
 
 
+def test_readme_speed_table_is_the_scale_report():
+    """The README's speed rows are rows of reports/bench-handshake-scale.md, number for number."""
+    readme = _table(README, "| what | env steps/s |")
+    report = _table((ROOT / "reports" / "bench-handshake-scale.md").read_text(encoding="utf-8"),
+                    "| what | env steps/s |")
+    assert len(readme) == 3
+    for name, steps, factor in readme:
+        match = [row for row in report if row[0].startswith(name)]
+        assert len(match) == 1 and match[0][1:] == [steps, factor], (name, match)
+
+
 def test_readme_docs_and_changelog_link_only_inside_the_repository():
     for path in [ROOT / "README.md", ROOT / "CHANGELOG.md", *PAGES]:
         text = path.read_text(encoding="utf-8")
