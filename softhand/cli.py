@@ -618,10 +618,15 @@ def skin_flex_press(design, region, posture, max_force, speed, picture, as_json)
     if picture is not None:
         from softhand.viz.render import CameraView, render_state
 
-        view = CameraView(lookat=tuple(press.lookat_m), distance_m=0.08, azimuth_deg=-90.0,
+        view = CameraView(lookat=tuple(press.lookat_m), distance_m=0.06, azimuth_deg=-90.0,
                           elevation_deg=-10.0)  # from the radial side, the palm down
         empty = np.zeros((0, 3)), np.zeros((0, 4))
-        click.echo(f"wrote {render_state(press.model, press.qpos, *empty, picture, view=view)}")
+        caption = (f"{design} flex pad on {region} ({posture}, seen from the radial side) "
+                   f"pressed by the plate (grey) to {peak:.2f} N at "
+                   f"{out['indentation_at_peak_mm']:.2f} mm; contacts dark magenta")
+        wrote = render_state(press.model, press.qpos, *empty, picture, view=view,
+                             caption=caption)
+        click.echo(f"wrote {wrote}")
 
 
 _OPT_CONTACT_LAWS = click.option(

@@ -270,3 +270,27 @@ def test_recording_time_4000_frames(model, tmp_path, record_property):
         read_recording_summary(tmp_path / "long.rrd")["entities"]["forces/Back2"]["sim_time_points"]
         == 4000
     )
+
+
+def test_pictures_keep_hidden_geoms_hidden_and_wrap_long_captions(tmp_path):
+    """A picture recolours each hand's geoms, but a hidden geom (alpha 0: the skin a flex pad
+    replaces) stays hidden; a caption longer than the picture is wide wraps onto more lines
+    instead of running off both sides."""
+    import mujoco
+    from PIL import Image
+
+    from softhand.envs.picture import hand_colours
+    from softhand.viz.render import _save
+
+    spec = mujoco.MjSpec()
+    body = spec.worldbody.add_body(name="b")
+    body.add_geom(name="pro_skin_Index3", size=[0.01, 0, 0], rgba=[0, 0, 0, 0])
+    body.add_geom(name="pro_skin_Index2", size=[0.01, 0, 0])
+    model = spec.compile()
+    assert list(hand_colours(model)) == [model.geom("pro_skin_Index2").id]
+    pixels = np.full((100, 200, 3), 200, np.uint8)
+    _save(tmp_path / "one.png", pixels, "short")
+    _save(tmp_path / "three.png", pixels, " ".join(["word"] * 30))
+    one, three = (Image.open(tmp_path / f"{n}.png").size for n in ("one", "three"))
+    extra = three[1] - one[1]  # 150 characters at 25 a line: 5 more lines of 18 pixels
+    assert one[0] == three[0] == 200 and extra == 5 * 18

@@ -81,9 +81,12 @@ def posed_data(model: mujoco.MjModel, qpos, mocap_pos, mocap_quat,
 
 
 def hand_colours(model: mujoco.MjModel) -> dict[int, tuple[float, ...]]:
-    """Geom id -> its hand's colour (HAND_COLOURS, by name prefix)."""
+    """Geom id -> its hand's colour (HAND_COLOURS, by name prefix); a hidden geom (alpha 0, e.g.
+    the skin a flex pad replaces) stays hidden."""
     out = {}
     for g in range(model.ngeom):
+        if model.geom_rgba[g, 3] == 0:
+            continue
         for prefix, colour in HAND_COLOURS.items():
             if model.geom(g).name.startswith(prefix):
                 out[g] = colour

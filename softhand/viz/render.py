@@ -134,8 +134,13 @@ def _save(target: Path, pixels: np.ndarray, caption: str | None = None) -> None:
         with atomic_open(target, "wb") as fh:
             plt.imsave(fh, pixels, format="png")
         return
+    import textwrap
+
     h, w = pixels.shape[:2]
-    band = 36  # pixels of caption under the picture
+    # wrapped to the picture's width (11 pt: at most 8 pixels a character), 18 pixels a line
+    lines = textwrap.wrap(caption, width=max(20, w // 8))
+    caption = "\n".join(lines)
+    band = 18 * len(lines) + 18  # pixels of caption under the picture
     fig = plt.figure(figsize=(w / 100, (h + band) / 100), dpi=100)
     fig.patch.set_facecolor(np.asarray(BACKGROUND) / 255)
     ax = fig.add_axes((0, band / (h + band), 1, h / (h + band)))
