@@ -78,7 +78,7 @@ ARROW_M_PER_N = 0.01
 #: the skin surface they lie on).
 _POINT_RADIUS_M = (0.003, 0.004)
 #: Force colour ramps (RGB): 0 N -> STANDOUT_FORCE_N pale to blue; above it orange to red.
-_COOL = (np.array([215.0, 210.0, 200.0]), np.array([70.0, 110.0, 200.0]))
+_COOL = (np.array([225.0, 222.0, 215.0]), np.array([115.0, 118.0, 125.0]))
 _WARM = (np.array([255.0, 170.0, 0.0]), np.array([200.0, 0.0, 0.0]))
 _TIMELINE = "sim_time"
 #: A region whose force never exceeds this (N) is left out of the force plot and unlabelled.
@@ -203,8 +203,9 @@ def force_colors(
 ) -> np.ndarray:
     """RGBA colours (uint8, shape ``force_N.shape + (4,)``) for normal forces.
 
-    From 0 N to ``standout_N`` a cool ramp, pale grey to blue; above ``standout_N`` a warm ramp,
-    orange to red at ``max_force_N`` and beyond, so that regions over 2 N stand out.
+    From 0 N to ``standout_N`` a grey ramp, pale to mid grey; above ``standout_N`` a warm ramp,
+    orange to red at ``max_force_N`` and beyond, so that regions over 2 N stand out (no blue: blue
+    is the partner's hand in every picture).
 
     Raises:
         ValueError: if ``max_force_N`` or ``standout_N`` is not a positive finite number.
@@ -354,7 +355,7 @@ def _blueprint(model: mujoco.MjModel | None = None, frames: HandshakeFrames | No
             name="embedded sensor readings (N on the 4 x 4 mm patch)"))
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial3DView(origin="world", name="handshake (grey-blue < 2 N, orange-red > 2 N)",
+            rrb.Spatial3DView(origin="world", name="handshake (grey < 2 N, orange-red > 2 N)",
                               eye_controls=eye, background=(250, 250, 248)),
             rrb.Vertical(
                 series,
@@ -443,7 +444,7 @@ def _log_recording(
               for d, rs in by_design.items()]
     idle = [r for r in frames.region_names if r not in loaded]
     text = ("# Hands and skins\n\n"
-            "- **prosthetic hand**: the softhand skin; its regions coloured by force, grey-blue "
+            "- **prosthetic hand**: the softhand skin; its regions coloured by force, grey "
             "under 2 N, orange to red over 2 N (red at the colour scale's top)\n"
             "- **partner's hand**: human tissue over bones\n\n" + "\n".join(table) + "\n\n"
             + (f"Regions that never carry over {LOADED_N:g} N (left out of the plot): "

@@ -82,8 +82,9 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
                  size: int = 480, distance_m: float = 0.3, contacts: bool = True) -> Path:
     """A contact sheet (PNG, atomic): one row per frame, one column per SHEET_VIEWS view, looking at
     the midpoint of the two palms. The prosthetic's skin regions are coloured by their force
-    (softhand.viz.recording.force_colors: grey to blue under 2 N, orange to red over), its other
-    skin grey, the partner's tissue green; MuJoCo's contact points shown."""
+    (softhand.viz.recording.force_colors: pale to mid grey under 2 N, orange to red over), its
+    other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); MuJoCo's
+    contact points shown."""
     from softhand.viz.recording import force_colors
 
     target = check_writable_file(path, suffix=".png")
@@ -104,7 +105,7 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
             for g in range(model.ngeom):
                 name = model.geom(g).name
                 if name.startswith("hum_tissue_"):
-                    colours[g] = (0.45, 0.75, 0.4, 0.75)
+                    colours[g] = HAND_COLOURS["hum_tissue_"]  # blue, as in every picture
                 elif name.startswith("pro_skin_"):
                     f = frame.region_force_N.get(name)
                     colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
@@ -115,8 +116,8 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
                 ax.imshow(picture.draw(data, view, contacts=contacts, colours=colours))
                 ax.set_title(f"{frame.label}\n{title}", fontsize=9)
                 ax.axis("off")
-    fig.text(0.5, 0.005, "prosthetic skin by force: grey-blue < 2 N, orange-red > 2 N (red 5 N); "
-             "partner's tissue green; contact points magenta", ha="center", fontsize=8)
+    fig.text(0.5, 0.005, "prosthetic skin by force: grey < 2 N, orange-red > 2 N (red 5 N); "
+             "partner's hand blue; contact points magenta", ha="center", fontsize=8)
     fig.tight_layout(rect=(0, 0.02, 1, 1))
     with atomic_open(target, "wb") as fh:
         fig.savefig(fh, format="png", dpi=100)
