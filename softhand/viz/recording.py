@@ -52,6 +52,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
+from softhand.envs.picture import HAND_COLOURS
 from softhand.hands import regions
 from softhand.io import check_writable_file
 from softhand.laws.fit import REFERENCE_FORCE_N
@@ -393,8 +394,11 @@ def _log_recording(
         entity = _path("world", "bodies", body, name)
         region = skin.get(name)
         colour = _colour_field(archetype)
-        if region is None:  # a plain geom: static colour
-            rgba = model.geom_rgba[g]
+        if region is None:  # a plain geom: static colour (the partner's tissue blue, as in
+            # every picture: softhand.envs.picture.HAND_COLOURS)
+            rgba = np.asarray(HAND_COLOURS["hum_tissue_"]) if (
+                name.startswith("hum_tissue_") and model.geom_rgba[g, 3] > 0) else \
+                model.geom_rgba[g]
             fields[colour] = [np.round(255 * rgba).astype(np.uint8)]
             log(entity, archetype.from_fields(**fields), static=True)
             continue
