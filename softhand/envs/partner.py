@@ -98,9 +98,15 @@ class Timeline:
                                                 self.release_s, self.return_s)))
 
 
+def _clip(x, lo: float, hi: float):
+    """np.clip(x, lo, hi) (the same values, NaN kept), without its dispatch wrappers, which cost
+    several times the arithmetic on a single env's one world."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
 def _min_jerk(s):
     """Minimum-jerk blend 0 -> 1 of s in [0, 1] (clipped), for a number or an array."""
-    s = np.clip(s, 0.0, 1.0)
+    s = _clip(s, 0.0, 1.0)
     # float_power is C's pow, as Python's s**3 on a float: numpy's s**3 differs in the last bit
     # for about 5 % of arrays' entries, and a handshake amplifies that to 1e-9 N
     return np.float_power(s, 3) * (10 - 15 * s + 6 * s * s)
@@ -251,16 +257,17 @@ class PartnerScript:
         holding = (phase == 1) | (phase == 2)
         out = self.open.copy()  # the reach
         if holding.any():
-            h = holding
+            # every world (a single env's one): a slice, which numpy indexes without a copy
+            h = slice(None) if holding.all() else holding
             s = _min_jerk((t[h] - self.ends[h, 0]) / CLOSE_S)[:, None]
             target = self.grip_forces_N[h]
-            error = np.clip((target - grip_force_N[h]) / target, -1, 1)
+            error = _clip((target - grip_force_N[h]) / target, -1.0, 1.0)
             # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
             # proportional part adds half of it
-            self._integral[h] = np.clip(self._integral[h] + MAX_EFFORT_RAD * error * dt / 0.1,
-                                        0.0, MAX_EFFORT_RAD)
-            self.efforts[h] = np.clip(self._integral[h] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
-                                      MAX_EFFORT_RAD)
+            self._integral[h] = _clip(self._integral[h] + MAX_EFFORT_RAD * error * dt / 0.1,
+                                      0.0, MAX_EFFORT_RAD)
+            self.efforts[h] = _clip(self._integral[h] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
+                                    MAX_EFFORT_RAD)
             q = np.minimum(self.open[h] + s * (self.grasp[h] - self.open[h])
                            + self.efforts[h, None] * self.effort_dir[h], self.q_max[h])
             self._release_from[h] = q
@@ -268,7 +275,7 @@ class PartnerScript:
             out[h] = q
         released = phase >= 3
         if released.any():  # the effort goes and the hand opens in 0.2 s
-            r = released
+            r = slice(None) if released.all() else released
             self.efforts[r] = self._integral[r] = 0.0
             held = np.where(self._released[r, None], self._release_from[r], self.grasp[r])
             s = _min_jerk((t[r] - self.ends[r, 2]) / 0.2)[:, None]
