@@ -1,6 +1,6 @@
 """Stage 1: finite-element indentation of synthetic finger phalanges (paper, Methods: FE).
 
-Public entry points: :func:`indent` for one design, :func:`run_sweep` for many, and the
+Public entry points: `indent` for one design, `run_sweep` for many, and the
 materials, geometry and mesh building blocks they use.
 """
 

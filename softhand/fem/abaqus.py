@@ -2,7 +2,7 @@
 
 A deck holds softhand's own mesh (same node and element numbers, plus one), materials and
 loading, so that a run of the other solver can be compared with
-:func:`softhand.fem.solver.indent`. One core (mesh, C3D20 connectivity, node sets, sections,
+`softhand.fem.solver.indent`. One core (mesh, C3D20 connectivity, node sets, sections,
 materials, skin and pocket surfaces) feeds two dialects:
 
 * ``"abaqus"`` (``fmt="inp"``): C3D20H bricks (hybrid, for nu = 0.47-0.49); the plate is an
@@ -26,15 +26,15 @@ are collapsed bricks (one face collapsed to a line); both solvers accept them. B
 y = 0 fixed, x = 0 and z = 0 symmetry planes. The force on the whole phalanx is -4 x RF2 of
 ``PLATE_RP`` (RF2 < 0: the skin pushes the plate up).
 
-Round indenters (``settings.indenter``, :mod:`softhand.fem.indenter`): Abaqus gets an analytical
+Round indenters (``settings.indenter``, `softhand.fem.indenter`): Abaqus gets an analytical
 rigid surface ``INDENTER`` on ``PLATE_RP``, a cylinder (TYPE=CYLINDER, the lower half circle swept
 along the axis) or a sphere (TYPE=REVOLUTION, a quarter circle revolved about the vertical),
 touching the top of the skin at travel 0. CalculiX gets a meshed rigid one
-(:func:`softhand.fem.calculix.indenter_grid`).
+(`softhand.fem.calculix.indenter_grid`).
 
 Plate travel: Abaqus/Standard cannot end a displacement-controlled step at a force, so the ramp
 goes to a depth that is either given or softhand's own displacement at ``max_force_N`` for the
-same model (:func:`write_deck` runs :func:`indent`); the hold keeps that depth, as softhand does.
+same model (`write_deck` runs `indent`); the hold keeps that depth, as softhand does.
 
 Units: mm, N, s, MPa.
 """
@@ -194,7 +194,7 @@ def _comment(text: str) -> list[str]:
 
 @dataclass(frozen=True)
 class DeckInfo:
-    """What :func:`write_deck` wrote.
+    """What `write_deck` wrote.
 
     Attributes:
         path: the deck file.
@@ -481,14 +481,14 @@ def inp_text(design: str | Design, settings: IndentationSettings | None = None, 
     """The deck of one design's 3D quarter indentation model.
 
     Args:
-        design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
+        design: a design name such as ``"pocket2-sil"`` or a `Design`.
         settings: run settings; ``mode`` must be ``"3d"``. Mesh, geometry overrides, material
             constants, moduli, elastic_only, speed, hold, max_force_N and penalty (CalculiX) are
             taken from it. CalculiX decks are always elastic (``elastic_only=True``).
         depth_mm: plate travel of the ramp, in (0, height). None: softhand's displacement at
-            ``max_force_N`` for the same model (runs :func:`indent` without hold).
+            ``max_force_N`` for the same model (runs `indent` without hold).
         dialect: ``"abaqus"`` or ``"calculix"``.
-        progress: passed to :func:`indent` when it runs.
+        progress: passed to `indent` when it runs.
 
     Raises:
         ValueError: unknown design, 2D mode, bad geometry, depth or dialect (before any FE run).
@@ -509,7 +509,7 @@ def write_deck(design: str | Design, path: str | os.PathLike,
     None) and before the file is opened: on error no file is written.
 
     Args:
-        design, settings, depth_mm, progress: as :func:`inp_text`.
+        design, settings, depth_mm, progress: as `inp_text`.
         path: the deck file (its folder is created); not an existing folder.
         fmt: ``"inp"`` (Abaqus/Standard) or ``"ccx"`` (CalculiX 2.20).
 
@@ -517,7 +517,7 @@ def write_deck(design: str | Design, path: str | os.PathLike,
         The path, format, plate travel and where the travel comes from.
 
     Raises:
-        ValueError: bad fmt or path, or as :func:`inp_text`.
+        ValueError: bad fmt or path, or as `inp_text`.
         ConvergenceError: softhand's run for the plate travel failed.
     """
     if fmt not in FORMATS:

@@ -1,14 +1,12 @@
 r"""Total-Lagrangian finite-strain assembly of internal force and tangent stiffness.
 
-Weak form (reference configuration :math:`\Omega_0`, Green strain :math:`E`, PK2 stress :math:`S`):
-
-.. math::
+Weak form (reference configuration `\Omega_0`, Green strain `E`, PK2 stress `S`):
 
     r(u) = \int_{\Omega_0} B(u)^T S\,dV, \qquad
     K = \int_{\Omega_0} B^T \mathbb{C} B\,dV + \int_{\Omega_0} \nabla_0 N\,S\,\nabla_0 N^T \otimes I\,dV,
 
-with :math:`B` the strain-displacement matrix at the current deformation gradient
-:math:`F = I + \nabla_0 u`. Plane strain keeps :math:`F_{33} = 1` and integrates per unit length.
+with `B` the strain-displacement matrix at the current deformation gradient
+`F = I + \nabla_0 u`. Plane strain keeps `F_{33} = 1` and integrates per unit length.
 The sparse pattern is computed once; each assembly scatters element matrices with one
 ``bincount`` into CSR data.
 """
@@ -28,7 +26,7 @@ from softhand.parallel import check_threads
 
 __all__ = ["ENGINES", "Assembler", "ElementState"]
 
-#: element engines: ``"compiled"`` (numba kernels, :mod:`softhand.fem.kernels`) and ``"numpy"``
+#: element engines: ``"compiled"`` (numba kernels, `softhand.fem.kernels`) and ``"numpy"``
 #: (the batched NumPy reference of this module); the same arithmetic, equal to rounding
 ENGINES = ("compiled", "numpy")
 
@@ -56,10 +54,11 @@ class Assembler:
         mesh: the mesh.
         materials: one material per layer id (index 0: inner part, 1: outer layer).
         threads: element blocks evaluated at once (NumPy releases the GIL in the batched
-            kernels, so 2 threads on 2 cores take about 0.6x the time); default:
-            :func:`softhand.parallel.default_threads`. The caller keeps BLAS single-threaded
-            (:func:`softhand.parallel.single_threaded_blas`): these threads own the cores.
-        engine: one of :data:`ENGINES`.
+            kernels, so the blocks run in parallel; the times with 1 and 2 threads are
+            measured by ``softhand bench fe``, ``reports/bench-fe.md``); default:
+            `softhand.parallel.default_threads`. The caller keeps BLAS single-threaded
+            (`softhand.parallel.single_threaded_blas`): these threads own the cores.
+        engine: one of `ENGINES`.
     """
 
     def __init__(self, mesh: Mesh, materials: list[Material], threads: int | None = None,
@@ -93,7 +92,7 @@ class Assembler:
         self._nnz = keys.size
         self.groups = [np.flatnonzero(mesh.layer == k) for k in range(len(materials))]
         self.n_qp = ref.weights.size
-        #: (free dofs, their block's pattern) of the last :meth:`_free_pattern` call
+        #: (free dofs, their block's pattern) of the last `_free_pattern` call
         self._free_cache: tuple[np.ndarray, tuple] | None = None
         if engine == "compiled":
             nd_ = nn * dim
@@ -200,7 +199,7 @@ class Assembler:
         return kernels
 
     def _evaluate_compiled(self, u: np.ndarray, state: ElementState, dt: float):
-        """:meth:`evaluate` on the compiled kernels (:mod:`softhand.fem.kernels`)."""
+        """`evaluate` on the compiled kernels (`softhand.fem.kernels`)."""
         kernels = self._kernels()
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
@@ -252,8 +251,8 @@ class Assembler:
 
     def _tangent_compiled(self, F: np.ndarray, D: np.ndarray, S: np.ndarray,
                           free: np.ndarray | None = None, raw: bool = False):
-        """:meth:`_tangent` from the compiled element tangents (:func:`kernels.element_tangents`);
-        ``raw``: the data of the whole pattern (:meth:`pattern`) instead of a matrix."""
+        """`_tangent` from the compiled element tangents (`kernels.element_tangents`);
+        ``raw``: the data of the whole pattern (`pattern`) instead of a matrix."""
         kernels = self._kernels()
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
@@ -273,7 +272,7 @@ class Assembler:
         return sp.csc_matrix((data[sel], cols, indptr), shape=(free.size, free.size))
 
     def force_of(self, elements: np.ndarray) -> np.ndarray:
-        """Internal force vector of ``elements`` alone, at the last :meth:`evaluate`."""
+        """Internal force vector of ``elements`` alone, at the last `evaluate`."""
         fe = self._element_forces[elements]
         return np.bincount(self.edofs[elements].ravel(), weights=fe.ravel(),
                            minlength=self.mesh.n_dofs)
@@ -320,7 +319,7 @@ class Assembler:
 
     def _tangent(self, F: np.ndarray, D: np.ndarray, S: np.ndarray,
                  free: np.ndarray | None = None) -> sp.spmatrix:
-        """Material plus geometric stiffness from the Gauss-point arrays of :meth:`evaluate`
+        """Material plus geometric stiffness from the Gauss-point arrays of `evaluate`
         (the strain matrix is built block by block here, never for the whole mesh)."""
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape

@@ -3,7 +3,7 @@
 Quarter of a block ``|x| <= width/2, 0 <= y <= height, |z| <= length/2`` in 3D (half,
 ``|x| <= width/2``, in 2D plane strain, per mm of length), quadratic elements graded towards the
 indenter's first contact at the top centre (x = z = 0, y = height). Same conventions as the
-phalanx mesh (:mod:`softhand.fem.mesh`): base y = 0 fixed, symmetry planes x = 0 and z = 0, the
+phalanx mesh (`softhand.fem.mesh`): base y = 0 fixed, symmetry planes x = 0 and z = 0, the
 top face is the outer (contact) surface, all elements in layer 0 (the inner material).
 """
 

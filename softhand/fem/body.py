@@ -1,9 +1,9 @@
 """Which body an FE run indents: the paper's phalanx or the palm (and back of the hand).
 
 ``body_mesh(body, design, mesh_level, dim)`` builds the body's mesh for
-:func:`softhand.fem.solver.indent` (``mesh=``). The phalanx is the mesh ``indent`` builds itself
+`softhand.fem.solver.indent` (``mesh=``). The phalanx is the mesh ``indent`` builds itself
 when given none (pass none to read its embedded sensor patches or to run a crossing cylinder on
-its full model); the palm is :func:`softhand.fem.palm.palm_mesh` with its default geometry.
+its full model); the palm is `softhand.fem.palm.palm_mesh` with its default geometry.
 """
 
 from __future__ import annotations
@@ -40,8 +40,8 @@ def body_mesh(body: str, design: str | Design, mesh_level: str | MeshSpec | Palm
     """The mesh of ``body`` for ``design`` at ``mesh_level`` (``dim`` 3 or 2).
 
     ``mesh_level`` is a level name of the body (``coarse``, ``default``, ``fine``; the phalanx
-    also ``uniform``) or the body's own element counts (:class:`MeshSpec` for the phalanx,
-    :class:`PalmMeshSpec` for the palm).
+    also ``uniform``) or the body's own element counts (`MeshSpec` for the phalanx,
+    `PalmMeshSpec` for the palm).
 
     Raises:
         ValueError: an unknown body, mesh level or design, element counts of the other body, a

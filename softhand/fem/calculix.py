@@ -1,8 +1,8 @@
 """CalculiX 2.20 dialect of the indentation deck, and the reader of its ``.dat`` output.
 
-:func:`softhand.fem.abaqus.write_deck` with ``fmt="ccx"`` writes the deck: the common core of
-:mod:`softhand.fem.abaqus` (nodes, C3D20 bricks, sets, hyperfoam, skin and pocket surfaces)
-followed by :func:`calculix_tail`. What differs from the Abaqus deck and why:
+`softhand.fem.abaqus.write_deck` with ``fmt="ccx"`` writes the deck: the common core of
+`softhand.fem.abaqus` (nodes, C3D20 bricks, sets, hyperfoam, skin and pocket surfaces)
+followed by `calculix_tail`. What differs from the Abaqus deck and why:
 
 * C3D20 (27-point integration, like softhand's 3x3x3-point Q27; CalculiX has no hybrid C3D20H).
   Coarse solid-pu, 0.015 mm increments, force against softhand at 0.25 / 0.5 mm: C3D20
@@ -26,7 +26,7 @@ followed by :func:`calculix_tail`. What differs from the Abaqus deck and why:
   the running average force, which is tiny at first contact (pocket2-sil: no convergence
   otherwise).
 * ``*NODE PRINT`` of U and RF of ``PLATE_RP`` puts the force history into ``JOBNAME.dat``
-  (:func:`read_ccx_dat`).
+  (`read_ccx_dat`).
 """
 
 from __future__ import annotations

@@ -1,25 +1,23 @@
 r"""Frictionless penalty contact, integrated at surface Gauss points.
 
-Each contact set is a linear gap :math:`g = g_0 + G u` evaluated at Gauss points of a surface,
-with weights :math:`w` (reference area). The penalty energy
-:math:`\Pi_c=\tfrac12\,\varepsilon\sum_q w_q\langle -g_q\rangle^2` gives
-
-.. math::
+Each contact set is a linear gap `g = g_0 + G u` evaluated at Gauss points of a surface,
+with weights `w` (reference area). The penalty energy
+`\Pi_c=\tfrac12\,\varepsilon\sum_q w_q\langle -g_q\rangle^2` gives
 
     r_c = -G^T (\varepsilon\, w \langle -g\rangle), \qquad K_c = G^T\,\mathrm{diag}(\varepsilon w\,[g<0])\,G,
 
-and the contact force :math:`\sum_q \varepsilon w_q\langle -g_q\rangle`. Integrating at Gauss points
+and the contact force `\sum_q \varepsilon w_q\langle -g_q\rangle`. Integrating at Gauss points
 (not nodes) lets the contact zone grow inside an element, which keeps the force curve smooth.
 
 * Plate: a rigid plane ``y = top - d`` (d the plate displacement). Frictionless: only the vertical
   component enters the gap. Exact for a flat plate, any sliding. A plate smaller than the body
   (``Mesh.plate_half_mm``, the palm) acts on the surface points under its face only.
-* Cylinder or sphere (:class:`RoundGaps`): the gap to a rigid cylinder or sphere of radius R is
-  nonlinear in u, :math:`g = |P(x - c)| - R` with :math:`x` the current point, :math:`c` the
-  centre (on the axis) and :math:`P` the projection off the cylinder's axis (the identity for a
-  sphere); it is linearised at every Newton iterate, :math:`G = n^T N` with the unit normal
-  :math:`n = P(x-c)/|P(x-c)|`, into a :class:`GapSet`. The tangent drops the curvature term
-  :math:`\varepsilon w\, g\,(P - nn^T)/|P(x-c)|` (relative size penetration / R, about 1e-4):
+* Cylinder or sphere (`RoundGaps`): the gap to a rigid cylinder or sphere of radius R is
+  nonlinear in u, `g = |P(x - c)| - R` with `x` the current point, `c` the
+  centre (on the axis) and `P` the projection off the cylinder's axis (the identity for a
+  sphere); it is linearised at every Newton iterate, `G = n^T N` with the unit normal
+  `n = P(x-c)/|P(x-c)|`, into a `GapSet`. The tangent drops the curvature term
+  `\varepsilon w\, g\,(P - nn^T)/|P(x-c)|` (relative size penetration / R, about 1e-4):
   Newton converges slightly less than quadratically, and the residual is exact.
 * Pocket: roof underside against floor, paired at the same surface coordinates (small sliding),
   gap measured along the floor's reference normal. Adequate while the roof closes onto the floor
@@ -73,7 +71,7 @@ class GapSet:
 
     def penalty_forces(self, u: np.ndarray, penalty: float, shift: float = 0.0):
         """Residual contribution, each point's penalty stiffness ``eps w [g < 0]`` (the
-        diagonal of the tangent :meth:`stiffness`) and the number of closed points."""
+        diagonal of the tangent `stiffness`) and the number of closed points."""
         g = self.gaps(u, shift)
         closed = g < 0.0
         lam = penalty * self.weight * np.where(closed, -g, 0.0)
@@ -81,7 +79,7 @@ class GapSet:
         return r, penalty * self.weight * closed, int(closed.sum())
 
     def stiffness(self, kw: np.ndarray) -> sp.csr_matrix:
-        """The tangent ``G^T diag(kw) G`` for the point stiffnesses of :meth:`penalty_forces`."""
+        """The tangent ``G^T diag(kw) G`` for the point stiffnesses of `penalty_forces`."""
         return self.G.T @ sp.diags(kw) @ self.G
 
 

@@ -47,7 +47,7 @@ _D = _geometry_defaults()
 #: Allowed range [low, high] of each field (mm; the exponent has no unit). Each is a physically
 #: sensible phalanx around the paper's (16 x 9 x 10 mm, 0.8 mm outer layer, 1 and 2 mm pockets)
 #: that the structured mesh can build; the relations between fields are checked as well (see
-#: :class:`PhalanxGeometry`).
+#: `PhalanxGeometry`).
 GEOMETRY_RANGES: dict[str, tuple[float, float]] = {
     "width_mm": (12.0, 20.0),  # finger phalanges; at most the indenter's 20 mm width
     "height_mm": (6.0, 12.0),  # the paper's 9 mm +- 3 mm; >= 6 leaves the bands and a core
@@ -68,7 +68,7 @@ _SIDE_WALL_MM = 0.5  # material kept between the pocket's edge and the side of t
 class PhalanxGeometry:
     """Dimensions of one synthetic phalanx (mm).
 
-    Each field has an allowed range (:data:`GEOMETRY_RANGES`, given below) and the fields must
+    Each field has an allowed range (`GEOMETRY_RANGES`, given below) and the fields must
     fit together: ``outer_layer_mm < pocket_roof_mm``; the bands meshed under the surface
     (roof, pocket or a 2 mm top band, 1 mm floor) plus a 1 mm core fit under ``height_mm``; the
     pocket's edge keeps 0.5 mm of side wall; the bands stay shallower than 0.75 times the outer
@@ -243,14 +243,14 @@ class Design:
     def geometry(self, **overrides: float) -> PhalanxGeometry:
         """The default geometry of this design, with optional field overrides.
 
-        A solid design has no pocket: :data:`POCKET_FIELDS` other than their solid defaults are
+        A solid design has no pocket: `POCKET_FIELDS` other than their solid defaults are
         rejected (the run would be labelled with the solid design's name). For a solid design
         whose width or roof leaves no room for the default 5 mm contact-zone edge
         (``pocket_half_width_mm``), the edge moves inwards to the largest allowed value.
 
         Raises:
             ValueError: an unknown field, a pocket field for a solid design, or a value that
-                :class:`PhalanxGeometry` rejects.
+                `PhalanxGeometry` rejects.
         """
         unknown = [k for k in overrides if k not in GEOMETRY_RANGES]
         if unknown:

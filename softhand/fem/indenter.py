@@ -11,7 +11,7 @@ x = 0 and z = 0, and a half cross-section in 2D, perpendicular to the phalanx ax
 
 * 3D: the plate, a sphere, and a cylinder at 0 deg (along the phalanx) or 90 deg (across it)
   keep both symmetry planes and run on the quarter. A cylinder at another angle breaks them and
-  runs on the full model (:func:`softhand.fem.mesh.full_model`, 4x the elements; no embedded
+  runs on the full model (`softhand.fem.mesh.full_model`, 4x the elements; no embedded
   sensor patches are read there, and it is not exported to Abaqus or CalculiX decks).
 * 2D (plane strain in the cross-section): the plate and a cylinder at 0 deg (its axis is normal
   to the section). A sphere, or a cylinder across the section, is not a plane-strain problem.

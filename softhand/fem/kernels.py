@@ -1,28 +1,26 @@
 r"""Compiled element kernels (numba): the same element arithmetic as the NumPy reference of
-:mod:`softhand.fem.assembly` and :mod:`softhand.fem.materials`, one Gauss point at a time.
+`softhand.fem.assembly` and `softhand.fem.materials`, one Gauss point at a time.
 
 Why compiled: the NumPy path spends its time on temporaries of small batched arrays (3 x 3
 eigenproblems, the 6 x 81 strain matrix per Gauss point and its products), not on arithmetic.
 These kernels evaluate the Storakers hyperfoam with Prony relaxation (paper eq. 1-5; the same
-formulas, divided differences and small-argument switches as :class:`Hyperfoam` and
-:class:`Material`) and the element force at each Gauss point in one pass, in parallel over
+formulas, divided differences and small-argument switches as `Hyperfoam` and
+`Material`) and the element force at each Gauss point in one pass, in parallel over
 elements (``numba.prange``; numba's threading layer releases the GIL).
 
-The tangent never forms the strain matrix. With :math:`G` the shape-function gradients and
-:math:`\mathbb{C}_{abcd}` the material tangent (from the Voigt :math:`D`),
-
-.. math::
+The tangent never forms the strain matrix. With `G` the shape-function gradients and
+`\mathbb{C}_{abcd}` the material tangent (from the Voigt `D`),
 
     K_{n i, m j} = \sum_q w_q \sum_d E^q_{n i j d}\, G^q_{m d}, \qquad
     E^q_{nijd} = \sum_{a b c} F_{ia} G^q_{nb} \mathbb{C}_{abcd} F_{jc} + \delta_{ij} (G^q S)_{nd},
 
-the material and geometric stiffness of :mod:`softhand.fem.assembly` in index form (minor
-symmetry of :math:`\mathbb{C}` removes the symmetrisation of the strain). The kernel builds
-:math:`E` (a few thousand multiply-adds per Gauss point) and the contraction over
+the material and geometric stiffness of `softhand.fem.assembly` in index form (minor
+symmetry of `\mathbb{C}` removes the symmetrisation of the strain). The kernel builds
+`E` (a few thousand multiply-adds per Gauss point) and the contraction over
 ``(q, d)`` is one batched matrix product per element (BLAS).
 
 Plane strain (``dim = 2``): only in-plane indices enter, exactly as in the reference
-(:math:`F_{33} = 1`, no out-of-plane gradient).
+(`F_{33} = 1`, no out-of-plane gradient).
 
 Results equal the NumPy reference to rounding (the tests compare forces and tangents at 1e-12
 relative, and whole curves within the solver tolerance).
@@ -195,9 +193,9 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
 
     Writes, for each element ``e = idx[k]``: its force ``fe[e]`` (``sum_q w G P``, P = F S),
     ``F_out[e]``, the total stress ``S_out[e]`` and tangent ``D_out[e]`` (Voigt), and the new
-    history ``S0_new``, ``H_new`` (rows ``k * nq + q``, the layout of :class:`ViscoState`).
+    history ``S0_new``, ``H_new`` (rows ``k * nq + q``, the layout of `ViscoState`).
     ``visco``: the material has a Prony series (``g``, ``decay``, ``ramp``: its factors over
-    this step, :meth:`Prony.step_factors`).
+    this step, `Prony.step_factors`).
 
     Returns the number of Gauss points with det F <= 0 or an indefinite C (0: all fine).
     """
@@ -282,11 +280,11 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
 
 @njit(cache=True)
 def _tangent_factor(e, F, S, D, dNdX, wdet, E):
-    r"""The factor :math:`E_{nijd}` of element ``e`` (module docstring), weights included, into
+    r"""The factor `E_{nijd}` of element ``e`` (module docstring), weights included, into
     ``E`` of shape ``(nn * dim * dim, nq * dim)``: rows ``(n, i, j)``, columns ``(q, d)``.
 
-    Per Gauss point the 9 x 9 matrix :math:`M_{ib,jd} = w(\sum_{ac} F_{ia}\mathbb{C}_{abcd}
-    F_{jc} + \delta_{ij} S_{bd})` is formed once; then :math:`E_{nijd} = \sum_b G_{nb}
+    Per Gauss point the 9 x 9 matrix `M_{ib,jd} = w(\sum_{ac} F_{ia}\mathbb{C}_{abcd}
+    F_{jc} + \delta_{ij} S_{bd})` is formed once; then `E_{nijd} = \sum_b G_{nb}
     M_{ib,jd}`.
     """
     nq, nn, dim = dNdX.shape[1], dNdX.shape[2], dNdX.shape[3]
@@ -324,8 +322,8 @@ def _tangent_factor(e, F, S, D, dNdX, wdet, E):
 @njit(parallel=True, cache=True)
 def element_tangents(F, S, D, dNdX, wdet, G_qdm, K):
     """Element tangents ``K[e]`` of shape ``(nn * dim * dim, nn)``, entries ordered
-    ``(n, i, j), m``: :math:`K_{ni,mj}` (material plus geometric stiffness), from the factor of
-    :func:`_tangent_factor` and one matrix product per element (BLAS) with ``G_qdm[e]``, the
+    ``(n, i, j), m``: `K_{ni,mj}` (material plus geometric stiffness), from the factor of
+    `_tangent_factor` and one matrix product per element (BLAS) with ``G_qdm[e]``, the
     shape-function gradients ordered ``(q, d), m``."""
     ne, nq, nn, dim = dNdX.shape
     for e in prange(ne):

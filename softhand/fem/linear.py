@@ -1,10 +1,10 @@
 """The Newton tangent of one run in one fixed sparse pattern, factorized by CHOLMOD.
 
 Every tangent of a run is the free-free block of the elements' stiffness plus the penalty
-stiffness of the contact points that are closed, :math:`G^T \\operatorname{diag}(\\varepsilon w
-[g<0])\\, G` (:mod:`softhand.fem.contact`). So every tangent's pattern lies in one union known
+stiffness of the contact points that are closed, `G^T \\operatorname{diag}(\\varepsilon w
+[g<0])\\, G` (`softhand.fem.contact`). So every tangent's pattern lies in one union known
 before the first step: the elements' pattern and, for each contact set, the couplings of each
-point's degrees of freedom. :class:`TangentSystem` builds that union's lower triangle once,
+point's degrees of freedom. `TangentSystem` builds that union's lower triangle once,
 analyses it once (CHOLMOD's symbolic factorization: fill-reducing ordering and supernodes), and
 then each Newton iteration only scatters numbers into it and runs the numeric supernodal
 Cholesky factorization (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; CHOLMOD as
@@ -72,7 +72,7 @@ class TangentSystem:
 
     Args:
         rows, cols: the elements' full pattern (one entry per stored value of the assembler's
-            tangent data, ``tangent_of(raw=True)`` of :meth:`Assembler.evaluate`).
+            tangent data, ``tangent_of(raw=True)`` of `Assembler.evaluate`).
         free: the free dofs, sorted.
         n_dofs: all dofs.
         contacts: one template gap matrix per contact set (CSR, points x dofs); each later

@@ -1,39 +1,33 @@
 r"""Storakers hyperfoam with Prony relaxation: the skins' constitutive law.
 
-Energy (paper eq. 2, Storakers 1986), for principal stretches :math:`\lambda_a`, :math:`J=\lambda_1\lambda_2\lambda_3`:
-
-.. math::
+Energy (paper eq. 2, Storakers 1986), for principal stretches `\lambda_a`, `J=\lambda_1\lambda_2\lambda_3`:
 
     U = \sum_{i=1}^{N} \frac{2\mu_i}{\alpha_i^2}\Big[\lambda_1^{\alpha_i}+\lambda_2^{\alpha_i}
         +\lambda_3^{\alpha_i}-3+\frac{1}{\beta}\big(J^{-\alpha_i\beta}-1\big)\Big],
     \qquad \beta=\frac{\nu}{1-2\nu}.
 
-With logarithmic principal strains :math:`l_a=\ln\lambda_a`, :math:`L=\ln J=\sum_a l_a` the linear
+With logarithmic principal strains `l_a=\ln\lambda_a`, `L=\ln J=\sum_a l_a` the linear
 terms of the bracket cancel exactly, so softhand evaluates
-
-.. math::
 
     U = \sum_i 2\mu_i\Big[\sum_a l_a^2\,\varphi_2(\alpha_i l_a) + \beta L^2\,\varphi_2(-\alpha_i\beta L)\Big],
     \qquad \varphi_2(x)=\frac{e^x-1-x}{x^2},
 
-which has no cancellation for silicone's :math:`\alpha_1=0.001` and tends to the Hencky energy
-:math:`\mu(\sum_a l_a^2+\beta L^2)` as :math:`\alpha\to0`. Principal Kirchhoff stresses are
-
-.. math::
+which has no cancellation for silicone's `\alpha_1=0.001` and tends to the Hencky energy
+`\mu(\sum_a l_a^2+\beta L^2)` as `\alpha\to0`. Principal Kirchhoff stresses are
 
     \tau_a=\frac{\partial U}{\partial l_a}=\sum_i 2\mu_i\big[l_a\varphi_1(\alpha_i l_a)
         +\beta L\,\varphi_1(-\alpha_i\beta L)\big],\qquad \varphi_1(x)=\frac{e^x-1}{x},
 
-and :math:`\partial\tau_a/\partial l_b=\sum_i2\mu_i[\delta_{ab}e^{\alpha_i l_a}+\beta e^{-\alpha_i\beta L}]`.
-The second Piola-Kirchhoff stress is :math:`S=\sum_a (\tau_a/c_a) N_a\otimes N_a` with :math:`c_a`,
-:math:`N_a` the eigenpairs of :math:`C=F^TF` (paper eq. 3), and the tangent
-:math:`\mathbb{C}=2\,\partial S/\partial C` follows from the spectral-function derivative, with the
-divided differences :math:`(S_a-S_b)/(c_a-c_b)` evaluated stably when :math:`c_a\approx c_b`.
+and `\partial\tau_a/\partial l_b=\sum_i2\mu_i[\delta_{ab}e^{\alpha_i l_a}+\beta e^{-\alpha_i\beta L}]`.
+The second Piola-Kirchhoff stress is `S=\sum_a (\tau_a/c_a) N_a\otimes N_a` with `c_a`,
+`N_a` the eigenpairs of `C=F^TF` (paper eq. 3), and the tangent
+`\mathbb{C}=2\,\partial S/\partial C` follows from the spectral-function derivative, with the
+divided differences `(S_a-S_b)/(c_a-c_b)` evaluated stably when `c_a\approx c_b`.
 
 Viscoelasticity (paper eq. 1, 4, 5): the relaxation function
-:math:`g(t)=1-\sum_k g_k(1-e^{-t/\tau_k})` acts on the instantaneous hyperfoam stress
-:math:`S_0`, :math:`S(t)=\int_0^t g(t-s)\,\dot S_0(s)\,ds`, integrated with the recursive update of
-Simo (1987) that is exact when :math:`S_0` is linear in time over a step.
+`g(t)=1-\sum_k g_k(1-e^{-t/\tau_k})` acts on the instantaneous hyperfoam stress
+`S_0`, `S(t)=\int_0^t g(t-s)\,\dot S_0(s)\,ds`, integrated with the recursive update of
+Simo (1987) that is exact when `S_0` is linear in time over a step.
 
 Voigt order everywhere: ``[11, 22, 33, 12, 23, 13]``; strains carry engineering shears.
 Units: MPa (N/mm^2), mm, s.
@@ -262,7 +256,7 @@ class Hyperfoam:
 class Prony:
     """Prony relaxation function g(t) = 1 - sum g_k (1 - exp(-t/tau_k)) (paper eq. 5), the one
     relaxation function of softhand: it relaxes the FE stress here and the force of the skin
-    laws (:mod:`softhand.laws.qlv`, where it is the normalised G(t) of quasi-linear
+    laws (`softhand.laws.qlv`, where it is the normalised G(t) of quasi-linear
     viscoelasticity). ``Prony()`` is no relaxation.
 
     Attributes:
@@ -322,7 +316,7 @@ class Prony:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "prony") -> Prony:
-        """Parse :meth:`to_dict` output, checking every value.
+        """Parse `to_dict` output, checking every value.
 
         Args:
             d: mapping with ``g`` (numbers in [0, 1), sum < 1), ``tau_s`` (as many numbers > 0)
@@ -476,14 +470,14 @@ def check_constants(name: str, constants: Any, *, key: str | None = None) -> dic
 
 
 def check_materials(data: Any, *, key: str = "") -> dict[str, dict[str, Any]]:
-    """Check a whole ``--materials`` object: material name -> constants (see :func:`check_constants`).
+    """Check a whole ``--materials`` object: material name -> constants (see `check_constants`).
 
     Args:
         data: the parsed JSON; its top level must be an object keyed by ``sil`` and/or ``pu``.
         key: key path of ``data`` in messages (``""``: the file's top level).
 
     Returns:
-        The constants as given, for :class:`~softhand.fem.solver.IndentationSettings`.
+        The constants as given, for `IndentationSettings`.
 
     Raises:
         ValueError: the first bad key or value, named.
@@ -510,7 +504,7 @@ def material(
         elastic_only: drop the Prony series and keep the law at the moduli as written.
         constants: replaces Table 3 for this material; keys ``nu``, ``mu_MPa``, ``alpha``,
             ``g``, ``tau_s`` (missing keys keep the Table 3 value); allowed values: see
-            :func:`check_constants`.
+            `check_constants`.
 
     Raises:
         ValueError: an unknown name or moduli, or a bad constant (``"sil.nu = 0.7: ..."``).

@@ -6,7 +6,7 @@ constant normal depth under the outer profile (floor, pocket, roof, outer layer)
 outer layer and the pocket have exactly their thickness everywhere. The 3D mesh extrudes the
 half section over half the length. Symmetry: x = 0 (both) and z = 0 (3D); the base y = 0 is fixed.
 
-Element counts per band are set by :class:`MeshSpec`; ``fine`` doubles every count of ``default``.
+Element counts per band are set by `MeshSpec`; ``fine`` doubles every count of ``default``.
 ``default`` is graded towards the pocket ends: once closed, the pocket is a crack-like slit whose
 tips make uniform refinement (``uniform``) converge only about linearly.
 """
@@ -97,10 +97,10 @@ class Mesh:
         roof_faces, floor_faces: facing pocket surfaces, paired row by row.
         symmetry_factor: multiplier from the modelled part to the whole phalanx force.
         length_mm: length the 2D force per unit length is multiplied by.
-        spec: the element counts it was built from (:class:`MeshSpec` for the phalanx; the palm's
-            :class:`softhand.fem.palm.PalmMeshSpec`).
+        spec: the element counts it was built from (`MeshSpec` for the phalanx; the palm's
+            `softhand.fem.palm.PalmMeshSpec`).
         plate_half_mm: half sizes (across x, along z) of the plate's face, centred over x = z = 0,
-            where the plate is smaller than the body: :func:`softhand.fem.contact.plate_gaps`
+            where the plate is smaller than the body: `softhand.fem.contact.plate_gaps`
             then presses only the outer-surface points under it (2D: ``|x| <= `` the first).
             None: the plate covers the whole modelled surface (the phalanx, 16 x 10 mm under
             the paper's 20 x 10 mm plate).

@@ -16,7 +16,7 @@ beyond (b = ``bone_half_width_mm``: the bump is 2 b wide at half its rise, the s
 and meets the floor with zero slope; its slope is at most ``pi rise / (4 b)``, so it has no
 vertical tangent and every column of the mesh below is a function of x).
 
-The mesh is a quarter cell, the same conventions as the phalanx's (:mod:`softhand.fem.mesh`):
+The mesh is a quarter cell, the same conventions as the phalanx's (`softhand.fem.mesh`):
 quadratic Q27 (Q9 in 2D) elements on a structured grid mapped column by column (each column's
 nodes lie between ``y_b(x)`` and the flat top), local axes (level up, -x, z), the top row's upper
 faces the outer surface, pocket roof and floor faces paired row by row. Its boundary conditions:
@@ -41,7 +41,7 @@ The 2D model (``dim=2``) is that plane-strain section, x >= 0 (force per mm time
 The paper's 20 x 10 mm plate lies with its 20 mm across the metacarpals (as across the phalanx)
 and its 10 mm along them; over the palm it is smaller than the body, so the mesh carries its
 half sizes (``Mesh.plate_half_mm``) and the plate presses only the points under it
-(:func:`softhand.fem.contact.plate_gaps`).
+(`softhand.fem.contact.plate_gaps`).
 
 Units: mm.
 """
@@ -61,7 +61,7 @@ from softhand.validate import check_number
 __all__ = ["PALM_MESH_LEVELS", "PALM_RANGES", "PalmGeometry", "PalmMeshSpec", "bone_height",
            "palm_mesh"]
 
-#: Allowed range [low, high] of each :class:`PalmGeometry` field (mm); see its docstring.
+#: Allowed range [low, high] of each `PalmGeometry` field (mm); see its docstring.
 PALM_RANGES: dict[str, tuple[float, float]] = {
     "spacing_mm": (14.0, 26.0),
     "bone_half_width_mm": (2.5, 6.5),
@@ -82,9 +82,9 @@ def _paper_spacing() -> float:
 class PalmGeometry:
     """Dimensions of the palm model (mm): a cell of skin over one metacarpal.
 
-    Each field has an allowed range (:data:`PALM_RANGES`); the bump must fit in its cell
+    Each field has an allowed range (`PALM_RANGES`); the bump must fit in its cell
     (``2 bone_half_width_mm <= spacing_mm / 2``). The design's layers must fit under the skin:
-    :func:`palm_mesh` checks that against the design.
+    `palm_mesh` checks that against the design.
 
     Attributes:
         spacing_mm: cell width, centre to centre of adjacent metacarpals, in [14, 26]. Default
@@ -185,7 +185,7 @@ class PalmMeshSpec:
             the pocket's edge, where the closed pocket behaves like a crack tip).
         n_side: from the pocket's edge to the cell's midplane, graded by ``side_grading``.
         n_outer, n_roof, n_pocket, n_floor, n_core: through each band, outside in (as the
-            phalanx's :class:`softhand.fem.mesh.MeshSpec`; a solid design meshes a 2 mm top
+            phalanx's `softhand.fem.mesh.MeshSpec`; a solid design meshes a 2 mm top
             band in place of the pocket).
         n_plate: along z under the plate's half length (uniform), 3D only.
         n_far: along z from the plate's edge to the far end, 3D only, graded by ``far_grading``.
@@ -298,10 +298,10 @@ def palm_mesh(design: str | Design, geometry: PalmGeometry | None = None,
     """Build the quarter-cell palm mesh of a design (module docstring: conventions).
 
     Args:
-        design: a design name or :class:`Design`; its layers (outer layer, roof, pocket height
+        design: a design name or `Design`; its layers (outer layer, roof, pocket height
             and half width) come from ``design.geometry()``, the phalanx's defaults.
-        geometry: the palm's dimensions (default :class:`PalmGeometry`).
-        spec: element counts, or a level of :data:`PALM_MESH_LEVELS`.
+        geometry: the palm's dimensions (default `PalmGeometry`).
+        spec: element counts, or a level of `PALM_MESH_LEVELS`.
         dim: 3 (quarter cell) or 2 (plane-strain half section, force per mm times the
             modelled length 2 x half_length_mm).
         layers: a phalanx geometry whose layer fields replace the design's defaults.

@@ -1,6 +1,6 @@
 """Embedded sensors in the FE phalanx: the force on a sensor patch inside the skin.
 
-A prosthetic skin's sensors sit inside it. Three placements (:data:`PLACEMENTS`):
+A prosthetic skin's sensors sit inside it. Three placements (`PLACEMENTS`):
 
 =================== ====================================================================
 ``bone``            on the fixed base (the bone under the core): the support's reaction
@@ -10,7 +10,7 @@ A prosthetic skin's sensors sit inside it. Three placements (:data:`PLACEMENTS`)
                     while the pocket is open
 =================== ====================================================================
 
-A patch (:class:`SensorPatch`) is a rectangle in plan view (``width_mm`` across the finger,
+A patch (`SensorPatch`) is a rectangle in plan view (``width_mm`` across the finger,
 ``length_mm`` along it, centred at ``center_x_mm``, ``center_z_mm`` from the apex line and the
 middle of the phalanx), projected onto its surface. The default, 4 x 4 mm under the indenter's
 centre, is an assumption standing for one taxel of a tactile array or a small piezoresistive
@@ -99,7 +99,7 @@ def default_patches(geom: PhalanxGeometry) -> tuple[SensorPatch, ...]:
 
 def _element_faces(mesh: Mesh):
     """(element, face nodes (3^(dim-1),)) of every face of every element, face nodes ordered as
-    :func:`softhand.fem.mesh.face_element` expects (the lower local axis fastest)."""
+    `softhand.fem.mesh.face_element` expects (the lower local axis fastest)."""
     dim = mesh.dim
     local = [tuple(reversed(n)) for n in itertools.product(range(3), repeat=dim)]
     faces = []

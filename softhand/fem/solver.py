@@ -1,14 +1,14 @@
 """Displacement-driven indentation: ramp at constant speed, then hold.
 
-The indenter (the paper's plate by default; a cylinder or a sphere, :mod:`softhand.fem.indenter`,
-with the gap of :class:`softhand.fem.contact.RoundGaps`) is called the plate below. The plate
+The indenter (the paper's plate by default; a cylinder or a sphere, `softhand.fem.indenter`,
+with the gap of `softhand.fem.contact.RoundGaps`) is called the plate below. The plate
 moves down at ``speed_mm_s`` until the reaction reaches ``max_force_N`` (or the plate
 reaches ``max_depth_mm``), then stays put for ``hold_s`` while the skin relaxes. Each step solves
 the nonlinear equilibrium with Newton's method on the free DOFs (base fixed, symmetry planes),
 with penalty contact. Steps adapt: they grow after easy steps, are capped so that the force rises
 by at most ``force_step_N`` per step, land on the target force, and are cut back and retried when
 Newton fails. When the step falls below ``min_step_mm`` the run stops with a
-:class:`ConvergenceError` that carries the step log.
+`ConvergenceError` that carries the step log.
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ class IndentationSettings:
 
     Attributes:
         mode: ``"3d"`` (quarter model) or ``"2d"`` (plane-strain cross-section, times length).
-        mesh: ``"coarse"``, ``"default"``, ``"fine"`` or a :class:`MeshSpec`.
+        mesh: ``"coarse"``, ``"default"``, ``"fine"`` or a `MeshSpec`.
         speed_mm_s: plate speed during the ramp (paper: 0.5), > 0.
         max_force_N: reaction at which the ramp stops (paper: 2 N), > 0.
         max_depth_mm: plate travel at which the ramp stops regardless of force, > 0.
@@ -90,26 +90,26 @@ class IndentationSettings:
             pocket2-sil's d(2 N) by 1e-5 relative and F(2 mm) by 3e-4 against 4e-7 N + 1e-6 F,
             and saves a quarter of the Newton iterations.
         tol_rel: relative part of the Newton tolerance, >= 0.
-        threads: threads for element evaluation (None: :func:`softhand.parallel.default_threads`,
+        threads: threads for element evaluation (None: `softhand.parallel.default_threads`,
             the CPUs this process may use, at most 4); BLAS stays single-threaded during the run,
             so these threads are the run's only parallelism. Does not change the result.
-        engine: ``"compiled"`` (numba element kernels, :mod:`softhand.fem.kernels`, and the
+        engine: ``"compiled"`` (numba element kernels, `softhand.fem.kernels`, and the
             tangent's fill-reducing ordering computed once per run) or ``"numpy"`` (the
             batched NumPy reference and an ordering per factorization). The same arithmetic:
             curves agree within the Newton tolerance (``softhand bench fe`` runs both).
-        geometry: overrides of :class:`PhalanxGeometry` fields.
-        sensors: embedded sensor patches (:class:`softhand.fem.sensors.SensorPatch`) read at
+        geometry: overrides of `PhalanxGeometry` fields.
+        sensors: embedded sensor patches (`softhand.fem.sensors.SensorPatch`) read at
             every output time; None: a 4 x 4 mm patch under the indenter at each placement the
-            design has (:func:`softhand.fem.sensors.default_patches`); () for none.
+            design has (`softhand.fem.sensors.default_patches`); () for none.
         materials: per material name (``sil``, ``pu``), constants replacing Table 3 (keys
             ``nu``, ``mu_MPa``, ``alpha``, ``g``, ``tau_s``).
         indenter: ``"plate"`` (the paper's), ``"cylinder:R_MM[@ANGLE_DEG]"`` or
-            ``"sphere:R_MM"`` (:mod:`softhand.fem.indenter`; stored in its canonical form, e.g.
+            ``"sphere:R_MM"`` (`softhand.fem.indenter`; stored in its canonical form, e.g.
             ``"cylinder:7.4@90"``). Each moves as the plate does; the force is the reaction
             along its travel. A cylinder at an angle other than 0 or 90 deg runs on the full
-            model (:func:`softhand.fem.mesh.full_model`), which reads no sensor patches.
+            model (`softhand.fem.mesh.full_model`), which reads no sensor patches.
         body: ``"phalanx"`` (the paper's) or ``"palm"``: the slab of the design's layers over a
-            metacarpal (:mod:`softhand.fem.palm`, its default geometry and its own mesh levels of
+            metacarpal (`softhand.fem.palm`, its default geometry and its own mesh levels of
             the same names; no embedded sensor patches).
     """
 
@@ -198,10 +198,10 @@ class IndentationResult:
         wall_s: wall-clock time of the run.
         n_dofs, n_elements: model size.
         embedded_sensors: per sensor patch name: ``placement``, ``area_mm2`` and ``force_N``
-            (aligned with ``time_s``; :mod:`softhand.fem.sensors`).
+            (aligned with ``time_s``; `softhand.fem.sensors`).
         contact_area_mm2: the plate's contact area on the whole phalanx (undeformed surface,
             mm^2), aligned with ``time_s``; the contact Gauss points whose gap is closed, so its
-            resolution is one point's share of a face (:meth:`GapSet.contact_area`).
+            resolution is one point's share of a face (`GapSet.contact_area`).
         plate_pressure: the plate's contact pressure at the end of the ramp (the peak force):
             ``points_mm`` (undeformed positions of the modelled part's plate-face Gauss points,
             x across the width, y up, z along the length in 3D), ``weight_mm2`` (each point's
@@ -419,7 +419,7 @@ class _Model:
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
 
     def tangent_system(self) -> TangentSystem:
-        """The compiled engine's fixed-pattern tangent (:mod:`softhand.fem.linear`), built on
+        """The compiled engine's fixed-pattern tangent (`softhand.fem.linear`), built on
         first use: the elements' pattern and every contact set's couplings."""
         if self._system is None:
             template = (self.plate.G if self.plate is not None
@@ -456,11 +456,11 @@ def indent(
     """Indent one design with a rigid indenter and return its force-displacement-time curve.
 
     Args:
-        design: a design name such as ``"pocket2-sil"`` or a :class:`Design`.
+        design: a design name such as ``"pocket2-sil"`` or a `Design`.
         settings: run settings (defaults: 3D, default plate, mesh, 0.5 mm/s to 2 N, 10 s hold).
         progress: called with the fraction done (0..1) after each accepted step.
         mesh: a prebuilt mesh instead of the design's phalanx (e.g. the test block of
-            :func:`softhand.fem.block.block_mesh`): the design then only names the materials
+            `softhand.fem.block.block_mesh`): the design then only names the materials
             (layer 0 inner, 1 outer), the indenter starts at the mesh's highest node, and no
             sensor patches are read. Its dimension must match ``settings.mode``.
 
@@ -484,7 +484,7 @@ def indent(
 
 def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
          progress: Callable[[float], None] | None) -> IndentationResult:
-    """The ramp and the hold of :func:`indent` on a built model."""
+    """The ramp and the hold of `indent` on a built model."""
     do_hold = s.hold_s > 0 and not s.elastic_only
     f_step = s.force_step_N or s.max_force_N / 12.0
     tol = lambda F: (s.tol_N + s.tol_rel * abs(F)) / model.scale  # noqa: E731  (modelled part)

@@ -101,17 +101,17 @@ def run_sweep(designs: Iterable[str] = DESIGNS, settings: IndentationSettings | 
     """Indent every design with the same settings; a progress bar counts designs.
 
     Args:
-        threads: cores to use (None: :func:`softhand.parallel.default_threads`): that many
+        threads: cores to use (None: `softhand.parallel.default_threads`): that many
             designs at once, one single-threaded worker process each; for a single design (or
             ``threads=1``) it runs in this process with ``threads`` element threads. The results
             do not depend on it.
         cluster: a Dask scheduler's address (``tcp://HOST:PORT``): the designs run on its
             workers, one single-threaded task each, whatever their number; not with ``threads``
-            (:func:`softhand.parallel.run_tasks`). The results are those of a local run.
+            (`softhand.parallel.run_tasks`). The results are those of a local run.
 
     Returns:
         The batch outcome: finished results in ``designs`` order, failed designs (their
-        :class:`ConvergenceError` text) and, after Ctrl-C, the designs that did not finish.
+        `ConvergenceError` text) and, after Ctrl-C, the designs that did not finish.
 
     Raises:
         ValueError: an unknown design, ``threads`` with ``cluster``, or a cluster that is
@@ -150,7 +150,7 @@ def read_summary(folder: str | Path) -> dict[str, Any] | None:
 
     Raises:
         ValueError: naming the file, when it is not JSON or not a summary that
-            :func:`write_results` wrote (no provenance settings, designs or curve hashes).
+            `write_results` wrote (no provenance settings, designs or curve hashes).
     """
     path = Path(folder) / "summary.json"
     if not path.exists():
@@ -212,7 +212,7 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
 
     A folder that already holds curves of the same settings is extended: its other designs stay
     in the summary (their curves are not touched) and the plot shows every design; a folder of
-    other settings is refused (:func:`folder_conflict`) unless this run replaces all it holds.
+    other settings is refused (`folder_conflict`) unless this run replaces all it holds.
 
     Args:
         results: the finished designs (at least one).
@@ -287,7 +287,7 @@ def write_results(results: dict[str, IndentationResult], out_dir: str | Path,
 
 
 def _curve_of(path: Path):
-    """A curve CSV as the arrays :func:`plot_curves` draws."""
+    """A curve CSV as the arrays `plot_curves` draws."""
     from types import SimpleNamespace
 
     data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
