@@ -1,7 +1,7 @@
 """Skin laws: elastic force-indentation laws with quasi-linear viscoelastic relaxation.
 
-Second stage of the flow: fitted to the FE stage's curves (:mod:`softhand.fem`), read by the MuJoCo
-calibration (:mod:`softhand.skin`). Imports only :mod:`softhand.fem` data, never later stages.
+Second stage of the flow: fitted to the FE stage's curves (`softhand.fem`), read by the MuJoCo
+calibration (`softhand.skin`). Imports only `softhand.fem` data, never later stages.
 """
 
 from softhand.laws.elastic import ElasticLaw

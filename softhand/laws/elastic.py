@@ -2,12 +2,10 @@ r"""Elastic skin laws: a smooth, monotone force-indentation curve that is zero a
 
 The law is written through its stiffness, a quadratic B-spline with non-negative coefficients,
 
-.. math::
-
     F(\delta) = \int_0^\delta \sum_j c_j M_j(s)\,ds = \sum_j c_j I_j(\delta), \qquad c_j \ge 0,
 
-so that :math:`F(0) = 0`, :math:`F' \ge 0` (monotone) and :math:`F \in C^2` for every coefficient
-vector; the force is linear in :math:`c`, so a fit is a non-negative least-squares problem. Past the
+so that `F(0) = 0`, `F' \ge 0` (monotone) and `F \in C^2` for every coefficient
+vector; the force is linear in `c`, so a fit is a non-negative least-squares problem. Past the
 last knot the law continues with its end stiffness (a straight line); below zero it gives no force
 (a skin does not pull).
 """
@@ -60,7 +58,7 @@ def monotone_inverse(y, x, f) -> np.ndarray:
     at increasing ``x``) reaches each ``y``, linear between samples, clamped to the table's ends.
     A flat or slightly falling step of the samples (round-off of a tabulated ramp) is taken as
     flat, so that the inverse stays single-valued. (A law inverts itself exactly:
-    :meth:`ElasticLaw.displacement_at`.)"""
+    `ElasticLaw.displacement_at`.)"""
     return np.interp(y, np.maximum.accumulate(np.asarray(f, dtype=float)), x)
 
 
@@ -106,7 +104,7 @@ class ElasticLaw:
         return np.where(np.asarray(delta_mm) < 0, 0.0, k)
 
     def force(self, delta_mm) -> np.ndarray:
-        """F(delta) in N; 0 for delta <= 0, linear past :attr:`max_mm`."""
+        """F(delta) in N; 0 for delta <= 0, linear past `max_mm`."""
         d = np.asarray(delta_mm, dtype=float)
         inside = np.clip(d, 0.0, self.max_mm)
         f = np.nan_to_num(self._force(inside))
@@ -121,7 +119,7 @@ class ElasticLaw:
     def displacement_at(self, force_N):
         """Indentation (mm) at which the law reaches ``force_N`` (each > 0): the one inversion of a
         law, by bisection (the law is monotone; 60 halvings: to round-off), linear past
-        :attr:`max_mm`. A float for a number, an array for an array."""
+        `max_mm`. A float for a number, an array for an array."""
         f = np.asarray(force_N, dtype=float)
         if not np.all(np.isfinite(f)) or np.any(f <= 0):
             bad = f.ravel()[~(np.isfinite(f.ravel()) & (f.ravel() > 0))][0]
@@ -144,7 +142,7 @@ class ElasticLaw:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "elastic") -> ElasticLaw:
-        """Parse :meth:`to_dict` output, checking every value.
+        """Parse `to_dict` output, checking every value.
 
         Args:
             d: mapping with ``knots_mm`` (>= 4 numbers, from 0, not decreasing) and

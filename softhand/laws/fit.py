@@ -4,10 +4,10 @@ The fit is a variable projection: for given relaxation times and fractions the Q
 in the elastic law's non-negative coefficients (a non-negative least-squares problem); an outer
 least-squares search moves the relaxation parameters. Every curve counts equally, whatever its
 number of samples. The curves reach 20 N (the handshake's range): residuals are weighted by
-:func:`force_weights`, absolute up to the paper's 2 N and relative above it, so that the stiff tail
+`force_weights`, absolute up to the paper's 2 N and relative above it, so that the stiff tail
 does not swamp the lifelike low-force part. Errors are reported as a percentage of 2 N over the
 whole curve and up to 2 N, and as a percentage of the force itself above 2 N
-(:class:`CurveError`).
+(`CurveError`).
 """
 
 from __future__ import annotations
@@ -58,8 +58,8 @@ class FitWarning(UserWarning):
 
 
 def fit_status(result, what: str) -> FitStatus:
-    """The :class:`FitStatus` of a ``scipy.optimize.least_squares`` result; warns
-    (:class:`FitWarning`, naming ``what``) when it stopped at its evaluation budget."""
+    """The `FitStatus` of a ``scipy.optimize.least_squares`` result; warns
+    (`FitWarning`, naming ``what``) when it stopped at its evaluation budget."""
     if result.status > 0:
         return FitStatus.CONVERGED
     warnings.warn(f"{what}: the fit stopped after {result.nfev} evaluations without meeting its "
@@ -299,7 +299,7 @@ class CurveError:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "error") -> CurveError:
-        """Parse :meth:`to_dict` output: a string label and errors >= 0 (the hold and the split
+        """Parse `to_dict` output: a string label and errors >= 0 (the hold and the split
         errors: or null)."""
         names = ("label", "rms_pct_of_2N", "max_pct_of_2N", "hold_max_pct")
         split = ("rms_pct_of_2N_to_2N", "rms_pct_above_2N")
@@ -362,12 +362,12 @@ class SkinLaw:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "law") -> SkinLaw:
-        """Parse :meth:`to_dict` output, checking every value (eagerly, here).
+        """Parse `to_dict` output, checking every value (eagerly, here).
 
         Args:
-            d: mapping with ``name`` (a string), ``elastic`` (:meth:`ElasticLaw.from_dict`),
-                ``prony`` (:meth:`Prony.from_dict`) and optionally ``fitted`` / ``validated``
-                (lists of :class:`CurveError` records) and ``source`` (an object).
+            d: mapping with ``name`` (a string), ``elastic`` (`ElasticLaw.from_dict`),
+                ``prony`` (`Prony.from_dict`) and optionally ``fitted`` / ``validated``
+                (lists of `CurveError` records) and ``source`` (an object).
             key: key path of ``d`` in messages.
 
         Raises:
@@ -393,7 +393,7 @@ class SkinLaw:
 
 
 def curve_errors(law: SkinLaw, curve: Curve) -> CurveError:
-    """Errors of ``law`` against ``curve`` (see :class:`CurveError`)."""
+    """Errors of ``law`` against ``curve`` (see `CurveError`)."""
     model = law.force(curve.time_s, curve.displacement_mm)
     err = model - curve.force_N
     hold_max = None

@@ -1,7 +1,7 @@
 """Lifelike score: how far a skin's compliance is from the human middle phalanx (Fig. 8).
 
 For each skin, the indentation at 1 N and at 2 N in a 0.5 mm/s ramp (the paper's test) is compared
-with the human reference law (:func:`softhand.laws.references.human_law`):
+with the human reference law (`softhand.laws.references.human_law`):
 
     distance = 100 * sqrt(mean_F ((d_skin(F) - d_human(F)) / d_human(F))^2),  F in {1 N, 2 N}
 

@@ -1,16 +1,12 @@
 r"""Quasi-linear viscoelasticity (Fung): an elastic law convolved with a Prony relaxation function.
 
-.. math::
-
     F(t) = \int_0^t G(t - s)\,\frac{d F_e(\delta(s))}{ds}\,ds, \qquad
     G(t) = g_\infty + \sum_i g_i e^{-t/\tau_i}, \quad g_\infty + \sum_i g_i = 1,
 
-with :math:`F_e` the *instantaneous* elastic law (:class:`~softhand.laws.elastic.ElasticLaw`); the
-long-term law is :math:`g_\infty F_e`. The integral is evaluated with one hereditary variable per term,
-exactly for an :math:`F_e(t)` that is linear between samples (the same recursion as the FE stage's
+with `F_e` the *instantaneous* elastic law (`ElasticLaw`); the
+long-term law is `g_\infty F_e`. The integral is evaluated with one hereditary variable per term,
+exactly for an `F_e(t)` that is linear between samples (the same recursion as the FE stage's
 Prony update):
-
-.. math::
 
     h_i^{n} = e^{-\Delta t/\tau_i} h_i^{n-1}
               + g_i\,\frac{\tau_i}{\Delta t}\left(1 - e^{-\Delta t/\tau_i}\right)\Delta F_e,
@@ -44,8 +40,8 @@ def qlv_response_matrix(fe: np.ndarray, t_s: np.ndarray, prony: Prony) -> np.nda
     """QLV force for several elastic histories at once: ``fe`` has shape (n_times, n_columns).
 
     The response is linear in ``fe``; a fit uses this to solve for the elastic law's coefficients.
-    ``prony`` is a :class:`Prony` or any kernel with ``g``, ``g_inf`` and ``step_factors`` (the
-    sensors' share kernel, whose ratios may be negative: :mod:`softhand.sensors.transfer`).
+    ``prony`` is a `Prony` or any kernel with ``g``, ``g_inf`` and ``step_factors`` (the
+    sensors' share kernel, whose ratios may be negative: `softhand.sensors.transfer`).
     """
     fe = np.asarray(fe, dtype=float)
     out = prony.g_inf * fe

@@ -13,7 +13,7 @@ assumptions stated here; neither has relaxation data in the paper, so both are e
   Beyond the paper's 2 N: the same exponential, whose form was measured on finger pulp and is the
   force-displacement relation that Serina, Mote & Rempel (1998, J Biomech 31(7):639-646) matched
   with a structural fingertip model over contact forces of 0.25-7.0 N. So the law counts as
-  calibrated to 7 N (:data:`DATA_MAX_N`), with two named assumptions: that the middle phalanx's
+  calibrated to 7 N (`DATA_MAX_N`), with two named assumptions: that the middle phalanx's
   tissue follows the pulp's exponential form, and that the paper's 0-2 N numbers fix its two
   constants also above 2 N (no middle-phalanx data above 2 N were found). Above 7 N the law is an
   extrapolation (the handshake flags contacts there); it is tabulated to 20 N so that the pair laws
