@@ -1,8 +1,8 @@
 """Give the geoms of any MJCF hand a calibrated skin (``softhand skin apply``).
 
 For a hand softhand did not build (a MuJoCo Menagerie-style MJCF: default classes, tendons or
-equality couplings, any number of fingers), :func:`apply_skin` turns named geoms into calibrated
-skin pads on an :class:`mujoco.MjSpec`:
+equality couplings, any number of fingers), `apply_skin` turns named geoms into calibrated
+skin pads on an `mujoco.MjSpec`:
 
 * each named geom gets ``contype = conaffinity = 0`` and one explicit ``<pair>`` with every
   counterpart geom (``against``; default: every geom outside the hand's subtree that can collide,
@@ -13,12 +13,12 @@ skin pads on an :class:`mujoco.MjSpec`:
   which MuJoCo's constraint solver uses at every posture): the force at a given penetration is
   the law's, whatever the hand's masses and posture ("mass-compensated", as the handshake);
 * the counterparts are rigid (a plate, an object): the pair's law is the skin's own
-  (:class:`softhand.skin.soft_contact.SoftContactParams`), from the shipped calibration. The
+  (`softhand.skin.soft_contact.SoftContactParams`), from the shipped calibration. The
   shipped soft contact is fitted to the whole 0-20 N FE loading curve; ``max_force_N`` instead
   fits it, in closed form, to the shipped FE loading curve up to that force, which is more
-  accurate below it (pocket2-sil up to 2 N: 3.9 % RMS of 2 N with the 0-20 N law, 1.5 % with a
-  law fitted to 5 N; :func:`skin_law_error` measures it);
-* each pair's law follows its contact class (:mod:`softhand.skin.contact_classes`): a round
+  accurate below it (`skin_law_error` measures it; pocket2-sil fitted to 5 N follows its FE
+  curve up to 2 N within 3 % RMS of 2 N on a fingertip, tests/test_skin_apply.py);
+* each pair's law follows its contact class (`softhand.skin.contact_classes`): a round
   skinned geom (capsule, cylinder, sphere, ellipsoid) is a phalanx, a flat one (mesh, box) a palm;
   a counterpart round up to 15 mm in radius presses like a finger, anything else like a flat.
   The phalanx pressed by a flat takes the shipped law (the paper's plate); the other classes the
@@ -36,15 +36,15 @@ skin pads on an :class:`mujoco.MjSpec`:
   self-contact;
 * representations: ``soft-contact`` (default) and ``rigid`` (the stock contact, kept as a pair
   for comparison). A relaxation pad needs the skin's outward normal and a body of its own
-  (:func:`softhand.skin.representations.add_hand_pad` does that for a known normal);
+  (`softhand.skin.representations.add_hand_pad` does that for a known normal);
   ``flex`` needs the ``discrete`` integrator (softhand.hands.flex_region).
 
-The result is plain MJCF that plain MuJoCo loads: :func:`write_skinned` writes the *source
+The result is plain MJCF that plain MuJoCo loads: `write_skinned` writes the *source
 file's own text* with only these changes spliced in (collision flags of the skinned geoms, the
 ``<pair>`` elements, absolute asset paths when the output is in another folder), lists them
-(:class:`ModelChange`) and records them, the designs, laws and softhand version in a header
+(`ModelChange`) and records them, the designs, laws and softhand version in a header
 comment; comments, attribute order, indentation and includes stay as the user wrote them
-(:mod:`softhand.skin.mjcf_edit`).
+(`softhand.skin.mjcf_edit`).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ class SkinnedGeom:
     pairs: tuple[str, ...]
     fit_range_N: float | None  # None: the shipped 0-20 N law
     #: per pair: the contact class of its two geoms and the law it got (the class, or
-    #: ``plate`` where the skin has no law of the class; :mod:`softhand.skin.contact_classes`)
+    #: ``plate`` where the skin has no law of the class; `softhand.skin.contact_classes`)
     pair_laws: dict[str, str] = field(default_factory=dict)
     #: the geom's (contype, conaffinity) before it was skinned (after its default classes)
     flags_before: tuple[int, int] = (0, 0)
@@ -197,7 +197,7 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
         skins_dir, fe_dir: the calibration (default: the shipped one).
 
     Returns:
-        One :class:`SkinnedGeom` per named geom. Everything is checked before ``spec`` is
+        One `SkinnedGeom` per named geom. Everything is checked before ``spec`` is
         changed.
 
     Raises:
@@ -318,7 +318,7 @@ class ModelChange:
 
 @dataclass(frozen=True)
 class SkinnedFile:
-    """What :func:`write_skinned` wrote: the file (``str()`` and ``os.fspath`` give its path)
+    """What `write_skinned` wrote: the file (``str()`` and ``os.fspath`` give its path)
     and every change made to the source, in file order of kind (flags, pairs, paths)."""
 
     path: Path
@@ -337,7 +337,7 @@ ASSET_FILES = {"mesh": ("file",), "hfield": ("file",), "skin": ("file",),
 
 
 def check_skinnable(source: str | os.PathLike, geoms: Sequence[str]) -> None:
-    """Check, before any work, that :func:`write_skinned` can edit ``source`` for ``geoms``:
+    """Check, before any work, that `write_skinned` can edit ``source`` for ``geoms``:
     the file is well-formed MJCF and each geom is written by name in it (not only in a file it
     includes, which skin apply does not rewrite, nor made by ``<replicate>``).
 
@@ -434,8 +434,8 @@ def _try_editor(path, cls, error):
 
 def skinned_text(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
                  out: str | os.PathLike) -> tuple[bytes, tuple[ModelChange, ...]]:
-    """The text of ``source`` with the changes :func:`apply_skin` made to ``spec``, and the list
-    of them (see :func:`write_skinned`)."""
+    """The text of ``source`` with the changes `apply_skin` made to ``spec``, and the list
+    of them (see `write_skinned`)."""
     from softhand.skin.mjcf_edit import MjcfEditor
 
     check_skinnable(source, [s.geom for s in skinned])
@@ -498,9 +498,9 @@ def skinned_text(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | 
 def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | os.PathLike,
                   out: str | os.PathLike) -> SkinnedFile:
     """Write the skinned model to ``out`` (atomically) as the text of ``source`` with only the
-    changes :func:`apply_skin` made, and return them with the path.
+    changes `apply_skin` made, and return them with the path.
 
-    The changes, each listed in :attr:`SkinnedFile.changes` and in a header comment at the top
+    The changes, each listed in `SkinnedFile.changes` and in a header comment at the top
     of the file:
 
     * each skinned geom's ``contype`` and ``conaffinity`` set to 0 where they were not (the old
@@ -515,7 +515,7 @@ def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str |
       ``texturedir`` (set to the source's folder) added to ``<compiler>`` (or a new first
       ``<compiler>``) when relative asset files need it, so that the file loads from anywhere.
 
-    Everything else is kept byte for byte (:mod:`softhand.skin.mjcf_edit`): comments, attribute
+    Everything else is kept byte for byte (`softhand.skin.mjcf_edit`): comments, attribute
     and element order, indentation, blank lines, quotes, character references, ``<include>``
     and defaults. A new element takes the indentation of its parent's first child and the
     file's line ending; its attributes are in double quotes (single where the edited tag uses
@@ -523,7 +523,7 @@ def write_skinned(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str |
     (geoms' collision flags and every pair's values) before it replaces ``out``.
 
     Raises:
-        ValueError: a geom is not written by name in ``source`` (:func:`check_skinnable`), or
+        ValueError: a geom is not written by name in ``source`` (`check_skinnable`), or
             the written file does not compile to the skinned spec.
     """
     import tempfile

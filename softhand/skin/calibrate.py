@@ -19,7 +19,7 @@ Error measures (all in the rig at timestep 1 ms unless told otherwise):
   and 100x the calibration mass and the curve at the calibration mass.
 * ``posture_sensitivity_pct`` (soft-contact): largest RMS difference (% of 2 N) between the force
   on the fingertip of an articulated three-link finger, pressed in four postures, and the law at the
-  same indentation (:mod:`softhand.skin.finger`).
+  same indentation (`softhand.skin.finger`).
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def fe_curves(design: str, fe_dir: str | Path) -> tuple[list[Curve], list[Curve]
     Each curve is checked against the sha256 that its folder's ``summary.json`` recorded when
     ``softhand fe sweep`` wrote it (when the folder has a summary): a curve cut at a row boundary
     parses as a shorter curve, but not with the recorded hash. The folders' settings are checked
-    first (:func:`check_fe_folders`): curves of other settings are never mixed.
+    first (`check_fe_folders`): curves of other settings are never mixed.
 
     Raises:
         FileNotFoundError: no 0.5 mm/s curve for ``design``.
@@ -195,7 +195,7 @@ class RepresentationResult:
 
 @dataclass(frozen=True)
 class ClassLaw:
-    """A skin's law for one contact class (:mod:`softhand.skin.contact_classes`) and its pair law
+    """A skin's law for one contact class (`softhand.skin.contact_classes`) and its pair law
     against the human tissue's law for that class.
 
     Attributes:
@@ -220,7 +220,7 @@ class ClassLaw:
 
     @classmethod
     def from_dict(cls, key: str, d: Any, *, path: str) -> ClassLaw:
-        """Parse :meth:`to_dict` output under ``path`` (ValueError naming the key path)."""
+        """Parse `to_dict` output under ``path`` (ValueError naming the key path)."""
         if key not in CLASSES:
             raise ValueError(f"{path} = {show(key)}: unknown class; allowed: {', '.join(CLASSES)}")
         check_mapping(path, d, required=("law", "pair_law", "indenter", "tissue", "curve"))
@@ -238,7 +238,7 @@ class SkinCalibration:
     """Everything the hand needs for one skin, with provenance.
 
     ``pair_law`` is the paper's protocol (skin and tissue both under a plate); ``pair_laws`` the
-    laws per contact class (:class:`ClassLaw`), which the handshake uses by default.
+    laws per contact class (`ClassLaw`), which the handshake uses by default.
     """
 
     design: str
@@ -289,7 +289,7 @@ class SkinCalibration:
     @classmethod
     def from_dict(cls, d: Any, *, source: str = "calibration", skin: str | None = None,
                   require: tuple[str, ...] = ()) -> SkinCalibration:
-        """Parse :meth:`to_dict` output, checking every value now (not on first use).
+        """Parse `to_dict` output, checking every value now (not on first use).
 
         Args:
             d: the parsed JSON.
@@ -365,7 +365,7 @@ def _parse_representation(rep: str, r: Any, law: SkinLaw, key: str
 
 def loading_error(out, curve: Curve, *, split: bool = False):
     """RMS and max error (% of 2 N) over the loading ramp, at the rig's actual indentation; with
-    ``split``, also :func:`softhand.laws.fit.split_errors` (up to 2 N / above 2 N) as a dict."""
+    ``split``, also `softhand.laws.fit.split_errors` (up to 2 N / above 2 N) as a dict."""
     t_end = curve.time_s[curve.peak_index]
     ramp = out.time_s <= t_end + 1e-12
     _, d, f = loading_ramp(curve)
@@ -586,10 +586,10 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
                     reference_mass_kg: float, initial: SoftContactParams | None = None
                     ) -> dict[str, ClassLaw]:
     """The laws of ``design`` per contact class whose FE curve ``fe_dir`` holds
-    (:mod:`softhand.skin.contact_classes`), each with its pair law against the human tissue's law
+    (`softhand.skin.contact_classes`), each with its pair law against the human tissue's law
     for that class. ``phalanx/flat`` is the plate law itself (against the tissue pressed like a
     finger, as a prosthetic phalanx presses a partner's palm). No tissue ``finger`` law (the FE
-    folders lack :data:`TISSUE_REFERENCE_DESIGN`'s plate or finger curve): only the classes
+    folders lack `TISSUE_REFERENCE_DESIGN`'s plate or finger curve): only the classes
     whose tissue side is flat."""
     from softhand.fem.sweep import read_summary
 

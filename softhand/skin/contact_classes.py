@@ -10,26 +10,26 @@ phalanx (the FE; Hertz and elastic-foundation estimates 0.33-0.8x, Johnson, Cont
 * **body**, the skin's side: ``phalanx`` for a round geom (capsule, cylinder, sphere, ellipsoid),
   ``palm`` for a flat one (mesh, box, plane);
 * **counterpart**, what presses the skin: ``finger`` for a round geom of radius at most
-  :data:`FINGER_MAX_RADIUS_MM`, ``flat`` otherwise.
+  `FINGER_MAX_RADIUS_MM`, ``flat`` otherwise.
 
 The four classes ``body/counterpart`` have their FE curves in folders of the FE root
-(:data:`FE_FOLDERS`): the paper's plate on the phalanx (the root itself), a cylinder of radius
-:data:`FINGER_RADIUS_MM` across the phalanx (``finger/``), and the palm model of
-:mod:`softhand.fem.palm` under the plate and the cylinder (``palm-plate/``, ``palm-finger/``).
+(`FE_FOLDERS`): the paper's plate on the phalanx (the root itself), a cylinder of radius
+`FINGER_RADIUS_MM` across the phalanx (``finger/``), and the palm model of
+`softhand.fem.palm` under the plate and the cylinder (``palm-plate/``, ``palm-finger/``).
 A class's skin law keeps the plate law's relaxation (quasi-linear viscoelasticity: the
 relaxation function is the material's, the elastic law the shape's) and fits its own elastic law
-to the class's FE ramp (:func:`fit_class_law`).
+to the class's FE ramp (`fit_class_law`).
 
 The tissue side of a pair (the partner's human tissue) is pressed by the skin's geom: a
 prosthetic phalanx presses it like a finger, a prosthetic palm like a flat. Published human
 data with curved indenters on the finger's middle phalanx were not found; so the tissue's
 ``finger`` law is a stated assumption: the tissue's plate law
-(:func:`softhand.laws.references.human_law`) times the FE's cylinder/plate force ratio of the
-solid silicone phalanx at the same depth (:func:`tissue_class_law`), a homogeneous soft layer of
+(`softhand.laws.references.human_law`) times the FE's cylinder/plate force ratio of the
+solid silicone phalanx at the same depth (`tissue_class_law`), a homogeneous soft layer of
 the finger's size over bone, as finger pulp is.
 
 A class without FE curves for a skin falls back to the plate law (``phalanx/flat``), and the run
-says so (:func:`pair_law_label`).
+says so (`pair_law_label`).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def _counterpart(model: mujoco.MjModel, geom: int) -> str:
 
 
 def classify(model: mujoco.MjModel, skin_geom: int, other_geom: int) -> str:
-    """The class (``body/counterpart``, :data:`CLASSES`) of a contact between a skin geom and the
+    """The class (``body/counterpart``, `CLASSES`) of a contact between a skin geom and the
     geom that presses it."""
     body = "phalanx" if geom_shape(model, skin_geom)[0] == "round" else "palm"
     return f"{body}/{_counterpart(model, other_geom)}"
@@ -112,7 +112,7 @@ def fit_class_law(design: str, key: str, plate_law: SkinLaw, curve: Curve) -> Sk
 def tissue_class_law(tissue: SkinLaw, counterpart: str, plate: Curve | None = None,
                      finger: Curve | None = None) -> SkinLaw:
     """The human tissue's law for a counterpart: ``flat``: ``tissue`` itself; ``finger``: its
-    elastic force times the cylinder/plate force ratio of :data:`TISSUE_REFERENCE_DESIGN`'s FE
+    elastic force times the cylinder/plate force ratio of `TISSUE_REFERENCE_DESIGN`'s FE
     ramps (``plate``, ``finger``) at the same depth (module docstring: a stated assumption),
     the ratio held at its last value beyond the FE's common depth range.
 

@@ -58,7 +58,7 @@ def _build(soft: SoftContactParams, posture: tuple[float, float, float], timeste
 def press_finger(soft: SoftContactParams, posture: str, *, depth_mm: float,
                  speed_mm_s: float = 0.5, timestep: float = 1e-3) -> Curve:
     """Hold ``posture`` and press the fingertip skin with a plate along its normal: a simulated
-    :class:`~softhand.laws.fit.Curve` labelled ``posture`` (``displacement_mm``: the skin
+    `Curve` labelled ``posture`` (``displacement_mm``: the skin
     contact's penetration, ``force_N`` its normal force)."""
     if posture not in POSTURES_DEG:
         raise ValueError(f"posture {posture!r} is unknown; allowed: {', '.join(POSTURES_DEG)}")

@@ -24,19 +24,15 @@ rotations, so stiffening FE curves (hyperfoam, pocket closure) fit only approxim
 softens in strong compression (E = 0.7 MPa: 15 N at 3.5 mm, 10 N at 4 mm). SNH stiffens instead
 (20 N at 2.6 mm); neither gives NaN at 0.5-2 ms or to 60 % of the height.
 
-Measured (2 cores shared with another job; default mesh 2 x 12 x 3 cells = 432 tetrahedra,
-117 free nodes, 352 dofs; timestep 1 ms): ``mj_step`` costs 1.4-1.6 ms against 5 us for the same
-plate on a rigid box, a cost ratio of 230-305 (:func:`flex_cost_ratio`; SNH ~320; a 1 x 6 x 2
-mesh ~40). Fits (``fit_flex``, young only, poisson 0.3, from 0.5 MPa): young, RMS and max error in
-% of 2 N, simulations, seconds:
-
-* svk (default): solid-pu 0.718 MPa, 0.94, 2.22, 7, 11 s; solid-sil 0.330 MPa, 2.45, 4.57, 12,
-  35 s; pocket2-sil 0.061 MPa, 17.9, 43.0, 13, 125 s.
-* snh: solid-pu 0.664 MPa, 1.34, 3.41, 8, 14 s; solid-sil 0.285 MPa, 1.04, 2.19, 7, 23 s;
-  pocket2-sil 0.038 MPa, 14.4, 35.6, 10, 104 s.
+Cost: the default mesh (2 x 12 x 3 cells = 432 tetrahedra, 117 free nodes, 352 dofs) makes a
+step cost a few hundred times the same plate's step on a rigid box (`flex_cost_ratio`; a
+coarser mesh costs less). A fit (``fit_flex``) moves Young's modulus only (Poisson's ratio 0.3,
+starting from 0.5 MPa), a few simulations of the ramp. The cost and each skin's fitted error are
+measured by ``softhand bench calibration`` (``reports/bench-calibration.md``), and on the hand by
+``softhand bench flex`` (``reports/bench-flex.md``).
 
 pocket2-sil: a homogeneous pad cannot be soft to 2 mm and stiffen sharply as the pocket closes; the
-SVK fit is 0.3-0.5 N too stiff at 1-2 mm and 0.86 N too soft at 2.7 mm. Fitting poisson too
+SVK fit is too stiff at 1-2 mm and too soft once the pocket has closed. Fitting poisson too
 changed the solid-pu RMS by < 0.1 point.
 """
 
@@ -131,7 +127,7 @@ class FlexPadParams:
 
 @dataclass(frozen=True)
 class FlexFit:
-    """Result of :func:`fit_flex`.
+    """Result of `fit_flex`.
 
     Attributes:
         params: fitted pad parameters.
@@ -208,7 +204,7 @@ def set_flex_options(spec: mujoco.MjSpec, timestep: float) -> None:
     Deformables advice; the M + h^2 K solve may need > 100 iterations), and MuJoCo's default
     convex-collision tolerance of 1 um: each pad element meets the plate through the convex
     collider, whose error enters the penetration (the contact penetrates ~15 um at 2 N); the
-    hand's 0.1 mm (:func:`softhand.hands.skeleton.new_spec`) made the pad 60 % stiffer at
+    hand's 0.1 mm (`softhand.hands.skeleton.new_spec`) made the pad 60 % stiffer at
     0.4 mm."""
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
     spec.option.ccd_tolerance = 1e-6
@@ -234,7 +230,7 @@ def add_flex_pad(spec: mujoco.MjSpec, parent: mujoco.MjsBody, params: FlexPadPar
     base centre) sits at ``pos`` (m) with rotation matrix ``rot`` (3x3, pad axes as columns)
     in ``parent``'s frame. Every other node is a child body of ``parent`` with three slide
     joints along ``parent``'s axes and its lumped mass, so the pad rides an articulated body.
-    The flex collides only with geoms that share :data:`CONTACT_BIT` (the plate's).
+    The flex collides only with geoms that share `CONTACT_BIT` (the plate's).
     """
     params.validate()
     nodes, tets, pinned, mass = _pad_mesh(params)
@@ -280,7 +276,7 @@ def build_flex_rig(params: FlexPadParams, *, plate_mass_kg: float = 0.02,
     Returns:
         The model: flex ``"pad"`` (dim 3), plate body ``"plate"`` with slide joint ``"plate_z"``
         (qpos = displacement, negative downward) and position actuator ``"plate_servo"``. The
-        plate bottom starts at the pad apex. Read the force with :func:`plate_force`.
+        plate bottom starts at the pad apex. Read the force with `plate_force`.
     """
     params.validate()
     _check("plate_mass_kg", plate_mass_kg, 1e-4, 10.0)
@@ -417,7 +413,7 @@ def simulate_flex_indentation(params: FlexPadParams, *, speed_mm_s: float = 0.5,
         max_force_N: stop early once the plate force reaches this (N); None runs the full ramp.
 
     Returns:
-        A simulated :class:`~softhand.laws.fit.Curve`, one sample per step (``displacement_mm``:
+        A simulated `Curve`, one sample per step (``displacement_mm``:
         the measured plate travel; ``stats``: ``wall_s``, ``steps``, ``step_wall_s`` in
         ``mj_step`` alone, ``max_penetration_mm``, ``n_warnings``).
 

@@ -121,7 +121,7 @@ def _escape(value: str, quote: str) -> str:
 
 
 class MjcfEditor:
-    """The text of one MJCF file and the edits asked of it; :meth:`text` applies them.
+    """The text of one MJCF file and the edits asked of it; `text` applies them.
 
     Args:
         text: the file's bytes.

@@ -1,32 +1,30 @@
 r"""Skin pad with relaxation, from native MuJoCo elements (the ``soft-contact+relaxation`` level).
 
 The skin surface is a *pad* body on a slide joint along the skin's inward normal (coordinate
-:math:`x` = compression, m). Its elastic law is the QLV law's long-term part :math:`g_\infty F_e(x)`,
+`x` = compression, m). Its elastic law is the QLV law's long-term part `g_\infty F_e(x)`,
 a C2 cubic spline written as a truncated power series
-
-.. math::
 
     F(x) = a x + b x^2 + c x^3 + \sum_k c_k (x - t_k)_+^3 \; - \;[\text{quadratic and cubic past } t_n]
 
 that MuJoCo evaluates natively: one fixed tendon per piece with a dead-band ``springlength =
 (-inf, t_k)`` and polynomial stiffness (the last one cancels the curvature, so the law continues as
-a straight line). The first piece too (:math:`t_0 = 0`): the law acts in compression only. On the
-joint, MuJoCo's polynomial :math:`-(a x + b x^2 + c x^3)` would act on both sides, and with
-:math:`b > 0` it is not restoring for :math:`x < 0` (pocket2-sil: negative stiffness below
+a straight line). The first piece too (`t_0 = 0`): the law acts in compression only. On the
+joint, MuJoCo's polynomial `-(a x + b x^2 + c x^3)` would act on both sides, and with
+`b > 0` it is not restoring for `x < 0` (pocket2-sil: negative stiffness below
 -0.79 mm, pushing outward below -1.46 mm): a pad pushed past its rest from behind ran away.
 
-Relaxation: QLV needs, per Prony term, a hereditary force :math:`h_i` with
-:math:`\dot h_i = g_i F_e'(x)\dot x - h_i/\tau_i`. Write :math:`F_e` as a piecewise-linear
-:math:`\sum_j k_j (x - t_j)_+` (non-negative slope increments :math:`k_j`, fitted). Then
-:math:`h_i = \sum_j h_{ij}` where each :math:`h_{ij}` is a *linear* Maxwell branch that engages at
-depth :math:`t_j`: a light slide dof :math:`y_{ij}` with damping :math:`c_{ij} = \tau_i g_i k_j`, tied to
-the pad by a tendon :math:`x - y_{ij}` whose spring :math:`g_i k_j` acts past a dead band
-:math:`t_j`. The sum obeys exactly the QLV equation for the piecewise-linear law: amount *and*
+Relaxation: QLV needs, per Prony term, a hereditary force `h_i` with
+`\dot h_i = g_i F_e'(x)\dot x - h_i/\tau_i`. Write `F_e` as a piecewise-linear
+`\sum_j k_j (x - t_j)_+` (non-negative slope increments `k_j`, fitted). Then
+`h_i = \sum_j h_{ij}` where each `h_{ij}` is a *linear* Maxwell branch that engages at
+depth `t_j`: a light slide dof `y_{ij}` with damping `c_{ij} = \tau_i g_i k_j`, tied to
+the pad by a tendon `x - y_{ij}` whose spring `g_i k_j` acts past a dead band
+`t_j`. The sum obeys exactly the QLV equation for the piecewise-linear law: amount *and*
 time constants are right at every depth (single nonlinear or linear branches get one of them wrong
 away from one depth: up to 10 % and 14 % in the hold for pocket2-pu, measured). A fitted
-multiplier per term on :math:`c_{ij}` absorbs what the rig adds (pad mass, contact compliance).
+multiplier per term on `c_{ij}` absorbs what the rig adds (pad mass, contact compliance).
 
-The pad contacts the world through a stiff calibrated contact (:mod:`softhand.skin.soft_contact`,
+The pad contacts the world through a stiff calibrated contact (`softhand.skin.soft_contact`,
 linear law) and needs the ``discrete`` integrator (light bodies, stiff springs). Units: SI.
 """
 
@@ -70,7 +68,7 @@ def spline_pieces(law: ElasticLaw, scale: float = 1.0) -> list[tuple[float, floa
 
 
 def evaluate_pieces(pieces: list[tuple[float, float, float, float]], x_m) -> np.ndarray:
-    """The force (N) of :func:`spline_pieces` at compression ``x_m`` (m), as MuJoCo computes it
+    """The force (N) of `spline_pieces` at compression ``x_m`` (m), as MuJoCo computes it
     (the pad's tendons: nothing below each knot, so nothing at ``x < 0``)."""
     x = np.asarray(x_m, dtype=float)
     out = np.zeros_like(x)
@@ -154,7 +152,7 @@ class PadParams:
 
     @classmethod
     def from_dict(cls, d: Any, law: SkinLaw, *, key: str = "params") -> PadParams:
-        """Parse :meth:`to_dict` output for ``law``, checking every value.
+        """Parse `to_dict` output for ``law``, checking every value.
 
         Allowed: ``reference_mm``, ``contact_stiffness_N_per_m``, ``max_compression_mm`` and
         ``pad_mass_kg`` > 0; ``damping_scale`` one number > 0 per Prony term of ``law``;

@@ -5,15 +5,15 @@ indentation is the sum of the two at that force (springs in series):
 
     delta_pair(F) = delta_skin(F) + delta_tissue(F).
 
-Both inversions are exact on the laws (monotone, :meth:`ElasticLaw.displacement_at`): the skin's
+Both inversions are exact on the laws (monotone, `ElasticLaw.displacement_at`): the skin's
 loading curve at the paper's 0.5 mm/s from its QLV law (the curve its ``soft-contact`` is fitted
 to), the tissue's elastic law. The series curve is built over the whole range both laws are
 tabulated on (the FE curves reach 20 N; the human law is tabulated to 20 N), then one soft contact
-(:func:`softhand.skin.soft_contact.fit_soft_contact`) is fitted to all of it, weighted absolute up
+(`softhand.skin.soft_contact.fit_soft_contact`) is fitted to all of it, weighted absolute up
 to 2 N and relative above. Its error against the exact series curve is reported up to 2 N (% of
 2 N) and above (% of the force). The *calibrated* range of the pair is the smaller of the two laws'
 data ranges (a design's FE curves, the tissue's published data:
-:data:`softhand.laws.references.DATA_MAX_N`); above it the handshake flags the contact.
+`softhand.laws.references.DATA_MAX_N`); above it the handshake flags the contact.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ class PairLaw:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "pair_law") -> PairLaw:
-        """Parse :meth:`to_dict` output, every value checked (ValueError naming the key path)."""
+        """Parse `to_dict` output, every value checked (ValueError naming the key path)."""
         names = ("against", "params", "fitted_max_N", "calibrated_max_N", "rms_pct_of_2N_to_2N",
                  "rms_pct_above_2N", "max_pct_of_2N", "fit_status")
         check_mapping(key, d, required=names)

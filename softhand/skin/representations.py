@@ -9,22 +9,22 @@ name                        MuJoCo elements                                  mem
 =========================== ================================================ ====================
 ``rigid``                   the geom's stock contact (MuJoCo's defaults)     none, and no law
 ``soft-contact``            the pair's solref/solimp, fitted to the loading  none: the 0.5 mm/s
-                            curve (:mod:`softhand.skin.soft_contact`)        loading curve
+                            curve (`softhand.skin.soft_contact`)             loading curve
 ``soft-contact+relaxation`` a pad body on a slide joint with the QLV law's   QLV, exact for the
                             spline spring and Maxwell branches               law's Prony terms
-                            (:mod:`softhand.skin.pad`)
-``flex``                    a tetrahedral flex pad (:mod:`softhand.skin.flex`) none (SVK solid)
+                            (`softhand.skin.pad`)
+``flex``                    a tetrahedral flex pad (`softhand.skin.flex`) none (SVK solid)
 =========================== ================================================ ====================
 
-Every class provides: :meth:`Representation.fit` (from a skin law and its FE curve),
-:meth:`~Representation.parse` / :meth:`~Representation.to_dict` (the calibration file),
-:meth:`~Representation.add_to_rig` and :meth:`~Representation.rig_contact` (the indentation rig of
-:mod:`softhand.skin.rig`), :meth:`~Representation.add_to_hand` and
-:meth:`~Representation.hand_pair_law` (a skin geom of an articulated hand against the other hand's
+Every class provides: `Representation.fit` (from a skin law and its FE curve),
+`parse` / `to_dict` (the calibration file),
+`add_to_rig` and `rig_contact` (the indentation rig of
+`softhand.skin.rig`), `add_to_hand` and
+`hand_pair_law` (a skin geom of an articulated hand against the other hand's
 tissue). Its fitted error and cost are measured in the rig by ``softhand calibrate`` and
 ``softhand bench calibration`` (the representation's ``RepresentationResult``).
 
-On a hand, the relaxation pad is a *hand pad* (:class:`HandPad`): the skin geom rides a pad body
+On a hand, the relaxation pad is a *hand pad* (`HandPad`): the skin geom rides a pad body
 that slides along the skin's outward normal under the segment, with the QLV law as its spring and
 branches; the pair against the partner's tissue carries the tissue's law alone, so that skin and
 tissue are in series mechanically. It runs under the hand's ``implicitfast`` integrator at 2 ms
@@ -36,10 +36,10 @@ hand stays on ``implicitfast``. The pad compresses along its normal only: a cont
 of a phalanx meets the tissue's law alone.
 
 For the same reason a ``flex`` region lives in its own scene, the hand alone with one phalanx
-wearing the pad (:mod:`softhand.hands.flex_region`, ``softhand skin flex-press``): there the pad
-on the articulated finger gives the rig's curve to 0.05-0.61 % of 2 N in two postures (solid
-designs; ``softhand bench flex``), with its
-contact area and pressure (:func:`softhand.skin.flex.contact_patch`).
+wearing the pad (`softhand.hands.flex_region`, ``softhand skin flex-press``): there the pad
+on the articulated finger follows the rig's curve, extended and flexed (the error is measured by
+``softhand bench flex``, ``reports/bench-flex.md``), with its
+contact area and pressure (`softhand.skin.flex.contact_patch`).
 """
 
 from __future__ import annotations
@@ -79,10 +79,10 @@ class StockContact:
 
 @dataclass(frozen=True)
 class Fitted:
-    """What :meth:`Representation.fit` found.
+    """What `Representation.fit` found.
 
     Attributes:
-        params: the representation's parameter object (:meth:`Representation.parse` makes the
+        params: the representation's parameter object (`Representation.parse` makes the
             same object from the file).
         record: the curve it is checked on in the rig (None: it was checked in its own rig and
             ``errors`` holds the result).
@@ -120,7 +120,7 @@ class HandPad:
     The pad's spring is integrated explicitly (``implicitfast`` is implicit in velocity only,
     and the pad dof has no damping; its branches lock on a step's time scale, so it feels the
     law's instantaneous stiffness): the pad is stable while omega h < 2, omega = sqrt(K / m),
-    K the law's stiffness and m the pad's 5 g plus the armature. :meth:`max_timestep_s` gives
+    K the law's stiffness and m the pad's 5 g plus the armature. `max_timestep_s` gives
     the largest timestep for a law up to a force.
     """
 
@@ -153,7 +153,7 @@ class HandPad:
     def max_stable_force(self, law: SkinLaw, timestep_s: float) -> tuple[float, float]:
         """The largest force (N) up to which a hand pad of ``law`` is stable at ``timestep_s``
         (inf: everywhere), and the stiffness it may reach there, ``K = 4 m / h^2`` (N/m); the
-        inverse of :meth:`max_timestep_s`."""
+        inverse of `max_timestep_s`."""
         e = law.elastic
         mass = hand_pad_params(law, self).pad_mass_kg + self.armature_kg
         k_max = 4.0 * mass / float(timestep_s) ** 2
@@ -179,7 +179,7 @@ class Representation(ABC):
         (ValueError naming ``key`` and the value)."""
 
     def to_dict(self, params: Any) -> dict:
-        """``params`` as the calibration file holds them (:meth:`parse` reads it back)."""
+        """``params`` as the calibration file holds them (`parse` reads it back)."""
         return params.to_dict()
 
     @abstractmethod
@@ -266,7 +266,7 @@ class SoftContact(Representation):
 
 
 class Relaxation(Representation):
-    """The relaxation pad: QLV with the law's own Prony terms (:mod:`softhand.skin.pad`)."""
+    """The relaxation pad: QLV with the law's own Prony terms (`softhand.skin.pad`)."""
 
     name = "soft-contact+relaxation"
     rig_integrator = "discrete"  # light bodies limit-cycle under implicitfast in the rig
@@ -379,7 +379,7 @@ def add_hand_pad(spec: mujoco.MjSpec, geom: str, law: SkinLaw, *,
 
     The geom is re-added, with all its attributes, to a pad body at the same place that slides
     along ``-outward`` (compression); the pad's spring and branches are the QLV law's
-    (:func:`softhand.skin.pad.add_pad`); the pad joint gets ``settings.armature_kg``. Sites and
+    (`softhand.skin.pad.add_pad`); the pad joint gets ``settings.armature_kg``. Sites and
     sensors that name the geom keep naming it. Returns the pad body.
 
     Raises:

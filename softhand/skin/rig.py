@@ -9,7 +9,7 @@ the indentation (plate descent minus bone descent: what the skin feels) and the 
 force. The plate follows the *indentation* history asked for: each step it is placed at the target
 indentation plus the bone's current descent, so the load cell's give does not enter the curve
 (the paper's machine is displacement-controlled too). Any representation
-(:data:`softhand.skin.representations.REPRESENTATIONS`) of any
+(`softhand.skin.representations.REPRESENTATIONS`) of any
 calibrated skin runs in the same rig.
 """
 
@@ -76,8 +76,8 @@ class RigSettings:
 def build_rig(representation: str, params: Any = None, *,
               settings: RigSettings = RigSettings()) -> mujoco.MjModel:
     """Compile the rig for ``representation`` with its parameter object ``params`` (what
-    :meth:`~softhand.skin.representations.Representation.parse` or ``.fit`` gives; ``rigid``:
-    None for MuJoCo's stock contact). ``flex`` has its own rig (:mod:`softhand.skin.flex`).
+    `parse` or ``.fit`` gives; ``rigid``:
+    None for MuJoCo's stock contact). ``flex`` has its own rig (`softhand.skin.flex`).
 
     Raises:
         ValueError: an unknown representation, or one that needs parameters given none.
@@ -147,9 +147,9 @@ class RangeIssue:
     """One way a pair law is used outside its calibration.
 
     Attributes:
-        kind: ``timestep`` (outside :data:`CHECKED_TIMESTEPS_S`) or ``stiffness`` (the contact,
+        kind: ``timestep`` (outside `CHECKED_TIMESTEPS_S`) or ``stiffness`` (the contact,
             integrated explicitly, is unstable at this timestep somewhere up to
-            :data:`CHECKED_FORCE_N`: :func:`contact_stable_timestep`).
+            `CHECKED_FORCE_N`: `contact_stable_timestep`).
         pair: the pair's name.
         severity: how far outside: the timestep over the nearest checked bound (or that bound over
             the timestep, >= 1), or the timestep over the largest stable one.
@@ -163,7 +163,7 @@ class RangeIssue:
 
 
 def warn_range_issues(issues: list[RangeIssue]) -> None:
-    """One :class:`SkinRangeWarning` for all the ``issues`` of a model (none if there are none),
+    """One `SkinRangeWarning` for all the ``issues`` of a model (none if there are none),
     attributed to the user's code: the pair's message when there is one issue, else the number
     of pairs and, per kind of issue, how many pairs have it and the worst one's message."""
     if not issues:
@@ -187,7 +187,7 @@ def warn_range_issues(issues: list[RangeIssue]) -> None:
 def apply_pair_law(model: mujoco.MjModel, pair: str | int, params: SoftContactParams) -> None:
     """Write ``params`` into a compiled pair, scaled by the pair's inverse inertia.
 
-    Warns as :func:`pair_law_values`.
+    Warns as `pair_law_values`.
     """
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     model.pair_solref[pid], model.pair_solimp[pid] = pair_law_values(model, pid, params)
@@ -210,7 +210,7 @@ def pair_mobility(model: mujoco.MjModel, pair: int, data: mujoco.MjData | None =
     A contact point away from the centre of mass can see more: 3.7x and 9.5x on the two rows of
     a capsule fingertip (10 g) lying on a box, yet that press stayed stable at 2 ms up to 16.6 N
     where a single row with kappa 9.5 would not (the two rows and their friction rows, solved
-    together, are not the one-row model of :func:`contact_stable_timestep`): the centre of mass
+    together, are not the one-row model of `contact_stable_timestep`): the centre of mass
     is the estimate that the indentation rig confirms (kappa 3, bound to +-5 %).
     """
     g1, g2 = int(model.pair_geom1[pair]), int(model.pair_geom2[pair])
@@ -235,7 +235,7 @@ def pair_mobility(model: mujoco.MjModel, pair: int, data: mujoco.MjData | None =
 @dataclass(frozen=True)
 class ContactStability:
     """Where a calibrated contact is least stable under an explicit integrator, and the largest
-    timestep it is stable at (:func:`contact_stable_timestep`).
+    timestep it is stable at (`contact_stable_timestep`).
 
     Attributes:
         max_timestep_s: the largest stable timestep, s.
@@ -244,7 +244,7 @@ class ContactStability:
         depth_mm: the penetration where the bound is tightest, mm.
         force_N: the law's force at that penetration, N.
         top_N: the force the check went up to, N.
-        mobility: kappa of :func:`pair_mobility`.
+        mobility: kappa of `pair_mobility`.
     """
 
     max_timestep_s: float
@@ -262,40 +262,38 @@ def contact_stable_timestep(params: SoftContactParams, inv_inertia: float, *,
     r"""The largest timestep at which a pair carrying ``params`` is stable up to ``top_N``.
 
     MuJoCo solves one contact row so that its acceleration is
-    :math:`\ddot r = (1-\beta)\,a_0 + \beta\,a_{ref}`, with :math:`a_0` the unconstrained
-    acceleration, :math:`a_{ref} = -b\,\dot r - k\,d(r)\,r` (direct solref :math:`(-S, -B)`:
-    :math:`k = S/d_w^2`, :math:`b = B/d_w`; :math:`S = \hat S \hat A`, :math:`B = \hat B \hat A`)
-    and :math:`\beta = \kappa d / (\kappa d + 1 - d)`, where :math:`\kappa = A/\hat A` is the
+    `\ddot r = (1-\beta)\,a_0 + \beta\,a_{ref}`, with `a_0` the unconstrained
+    acceleration, `a_{ref} = -b\,\dot r - k\,d(r)\,r` (direct solref `(-S, -B)`:
+    `k = S/d_w^2`, `b = B/d_w`; `S = \hat S \hat A`, `B = \hat B \hat A`)
+    and `\beta = \kappa d / (\kappa d + 1 - d)`, where `\kappa = A/\hat A` is the
     row's true inverse inertia over the one the solver regularises with
-    (:func:`pair_mobility`; :math:`\beta = d` when they agree). Linearised about the static
-    equilibrium at penetration :math:`r` (where :math:`a_0` balances the contact), the row is an
+    (`pair_mobility`; `\beta = d` when they agree). Linearised about the static
+    equilibrium at penetration `r` (where `a_0` balances the contact), the row is an
     oscillator of angular frequency and damping rate
-
-    .. math::
 
         \omega^2 = \frac{\kappa k d}{\kappa d + 1 - d}
                    \Big(d + d' r + \frac{d' r}{1 - d}\Big), \qquad
         \gamma = \frac{\kappa d\,b}{\kappa d + 1 - d}
 
-    (:math:`d' = \mathrm{d}d/\mathrm{d}r`: the impedance sigmoid stiffens the contact where it
-    rises). :math:`a_{ref}` is evaluated at the step's start (the constraint force is implicit in
+    (`d' = \mathrm{d}d/\mathrm{d}r`: the impedance sigmoid stiffens the contact where it
+    rises). `a_{ref}` is evaluated at the step's start (the constraint force is implicit in
     the acceleration only: ``implicitfast``, ``implicit`` and ``Euler`` differentiate passive and
     actuator forces, never contacts), then the velocity and position are updated one after the
     other (semi-implicit Euler). For that map the Jury criterion gives stability iff
-    :math:`(\omega h)^2 + 2 \gamma h < 4` (:math:`\omega h < 2` undamped), so
+    `(\omega h)^2 + 2 \gamma h < 4` (`\omega h < 2` undamped), so
 
-    .. math:: h_{max} = \min_r \frac{\sqrt{\gamma^2 + 4\omega^2} - \gamma}{\omega^2}
+        h_{max} = \min_r \frac{\sqrt{\gamma^2 + 4\omega^2} - \gamma}{\omega^2}
 
     over the penetrations up to ``top_N``. ``RK4`` is held to the same bound (its own is higher:
-    :math:`\omega h < 2\sqrt 2` undamped). Checked in the indentation rig (a free indenter on a
-    slide joint, :math:`\kappa = 3`, under a dead weight): pocket2-sil, pocket2-sil-pu on 20 g
-    and solid-pu on 2 g at 10 and 20 N hold still at 0.95 :math:`h_{max}` and oscillate
-    without bound at 1.05 :math:`h_{max}`.
+    `\omega h < 2\sqrt 2` undamped). Checked in the indentation rig (a free indenter on a
+    slide joint, `\kappa = 3`, under a dead weight): pocket2-sil, pocket2-sil-pu on 20 g
+    and solid-pu on 2 g at 10 and 20 N hold still at 0.95 `h_{max}` and oscillate
+    without bound at 1.05 `h_{max}`.
 
     Args:
         params: the skin's soft contact.
-        inv_inertia: :math:`\hat A`, the compiler's inverse inertia of the pair, 1/kg, > 0.
-        mobility: :math:`\kappa`, >= 0 (1: the true inverse inertia is the compiler's).
+        inv_inertia: `\hat A`, the compiler's inverse inertia of the pair, 1/kg, > 0.
+        mobility: `\kappa`, >= 0 (1: the true inverse inertia is the compiler's).
         top_N: the largest force the contact should carry, N, > 0.
         n: penetrations sampled between 0 and the depth of ``top_N``.
     """
@@ -324,9 +322,9 @@ def contact_stable_timestep(params: SoftContactParams, inv_inertia: float, *,
 @functools.lru_cache(maxsize=256)
 def _stability_grid(params: SoftContactParams, top_N: float,
                     n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What :func:`contact_stable_timestep` needs of the law alone (a scene's pairs share a few
+    """What `contact_stable_timestep` needs of the law alone (a scene's pairs share a few
     laws): the penetrations up to the depth of ``top_N`` (m), the impedance there, and
-    :math:`d + d' r + d' r / (1 - d)`. Read-only arrays."""
+    `d + d' r + d' r / (1 - d)`. Read-only arrays."""
     r_top = params.solimp[2]
     while float(params.force(r_top * 1e3)) < top_N:
         r_top *= 2
@@ -351,14 +349,14 @@ def pair_law_values(model: mujoco.MjModel, pair: str | int, params: SoftContactP
     ``model`` is the compiled model (its ``body_invweight0``); the values may go into that model
     or into the spec it was compiled from (the inverse inertia does not depend on them).
 
-    The pair is outside its calibrated range (a :class:`RangeIssue`) when the timestep is outside
+    The pair is outside its calibrated range (a `RangeIssue`) when the timestep is outside
     the checked range, or when the contact is unstable at the model's timestep somewhere up to
-    :data:`CHECKED_FORCE_N` (:func:`contact_stable_timestep`, with the pair's
-    :func:`pair_mobility` at ``qpos0``; ``discrete`` integrates it implicitly and is not
-    checked). With ``issues`` None this warns at once (:func:`warn_range_issues`); a caller that
+    `CHECKED_FORCE_N` (`contact_stable_timestep`, with the pair's
+    `pair_mobility` at ``qpos0``; ``discrete`` integrates it implicitly and is not
+    checked). With ``issues`` None this warns at once (`warn_range_issues`); a caller that
     sets many pairs passes a list, which collects the issues, and warns once for all of them
-    (:func:`warn_range_issues`); it may also pass ``data``, the model's state at ``qpos0`` after
-    ``mj_forward``, made once for all of them (:func:`pair_mobility`).
+    (`warn_range_issues`); it may also pass ``data``, the model's state at ``qpos0`` after
+    ``mj_forward``, made once for all of them (`pair_mobility`).
     """
     pid = pair if isinstance(pair, int) else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, pair)
     if pid < 0:
@@ -405,7 +403,7 @@ def plate_force(model: mujoco.MjModel, data: mujoco.MjData, plate_geom: int) -> 
 def run_rig(model: mujoco.MjModel, time_s, displacement_mm, *, representation: str = "",
             settings: RigSettings = RigSettings()) -> Curve:
     """Drive the plate along ``displacement_mm(time_s)`` (linear in between) and record it: a
-    simulated :class:`~softhand.laws.fit.Curve` (the plate's actual descent from first touch,
+    simulated `Curve` (the plate's actual descent from first touch,
     the normal contact force on the plate; ``stats``: ``wall_s`` in ``mj_step`` alone,
     ``steps``, ``step_us``), labelled ``representation``."""
     t_cmd, d_cmd = paired_arrays(time_s, displacement_mm, ("time_s", "displacement_mm"))

@@ -40,9 +40,9 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
 
     Args:
         threads: skins calibrated at once, one single-threaded worker process each (None:
-            :func:`softhand.parallel.default_threads`).
+            `softhand.parallel.default_threads`).
         cluster: a Dask scheduler's address (``tcp://HOST:PORT``): the skins are calibrated on
-            its workers; not with ``threads`` (:func:`softhand.parallel.run_tasks`).
+            its workers; not with ``threads`` (`softhand.parallel.run_tasks`).
     """
     from tqdm import tqdm
 
@@ -72,7 +72,7 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
 
 @dataclass(frozen=True)
 class CalibrationRun:
-    """What :func:`calibrate_many` did.
+    """What `calibrate_many` did.
 
     Attributes:
         index: the rewritten ``index.json`` (None when no skin finished; nothing was written).

@@ -1,20 +1,18 @@
 r"""Calibrated soft contact: a skin's force law written into MuJoCo's solref/solimp.
 
 At rest, one contact row with direct-format ``solref = (-S, -B)`` and ``solimp = (d0, dw, width,
-mid, power)`` carries (MuJoCo's constraint model, :math:`\hat A` = the row's approximate inverse
+mid, power)`` carries (MuJoCo's constraint model, `\hat A` = the row's approximate inverse
 inertia ``efc_diagA``, frozen at ``qpos0``):
-
-.. math::
 
     F(r) = \frac{S}{\hat A}\,\frac{d(r)^2}{d_w^2\,(1 - d(r))}\,r
          + \frac{B}{\hat A}\,\frac{d(r)}{d_w\,(1 - d(r))}\,\dot r
 
-where :math:`d(r)` is the impedance sigmoid. So the same (S, B) gives a different force on a
-different body; writing :math:`S = \hat S \hat A` and :math:`B = \hat B \hat A` per contact pair
-makes the law independent of the bodies' masses and of the hand's posture (:math:`\hat A` is
+where `d(r)` is the impedance sigmoid. So the same (S, B) gives a different force on a
+different body; writing `S = \hat S \hat A` and `B = \hat B \hat A` per contact pair
+makes the law independent of the bodies' masses and of the hand's posture (`\hat A` is
 ``body_invweight0[b1, 0] + body_invweight0[b2, 0]``, computed by the compiler). This module fits
-:math:`(\hat S, d_0, d_w, \text{width}, \text{mid}, \text{power})` to a force-indentation curve and
-writes the pair parameters. The impedance stays :math:`d \le 0.3` so that the contact remains a force
+`(\hat S, d_0, d_w, \text{width}, \text{mid}, \text{power})` to a force-indentation curve and
+writes the pair parameters. The impedance stays `d \le 0.3` so that the contact remains a force
 law rather than a motion constraint (DESIGN.md, "Into MuJoCo"). Units: SI inside MuJoCo (m, N);
 the fit takes mm and N like the FE curves.
 """
@@ -54,8 +52,8 @@ class SoftContactParams:
     """Mass-normalised soft-contact parameters of one skin.
 
     Attributes:
-        stiffness: :math:`\\hat S`, N/m per unit inverse inertia (solref[0] = -stiffness * A).
-        damping: :math:`\\hat B`, N s/m per unit inverse inertia (solref[1] = -damping * A).
+        stiffness: `\\hat S`, N/m per unit inverse inertia (solref[0] = -stiffness * A).
+        damping: `\\hat B`, N s/m per unit inverse inertia (solref[1] = -damping * A).
         solimp: (d0, dw, width_m, midpoint, power).
     """
 
@@ -108,7 +106,7 @@ class SoftContactParams:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "params") -> SoftContactParams:
-        """Parse :meth:`to_dict` output, checking every value.
+        """Parse `to_dict` output, checking every value.
 
         Allowed: ``stiffness_N_per_m_per_invmass`` > 0, ``damping_Ns_per_m_per_invmass`` >= 0,
         ``solimp`` 5 numbers: d0 and dw in [1e-4, 0.3] with d0 <= dw, width > 0 (m), midpoint in
@@ -137,7 +135,7 @@ class SoftContactParams:
 
 
 class SoftContactFit(NamedTuple):
-    """What :func:`fit_soft_contact` found: the parameters, their RMS error (N) on the given
+    """What `fit_soft_contact` found: the parameters, their RMS error (N) on the given
     curve and how the best start's least-squares fit ended."""
 
     params: SoftContactParams
@@ -155,7 +153,7 @@ def fit_soft_contact(delta_mm, force_N, *, damping_ratio: float = 0.5,
     lightest body the skin will touch: contact damping is explicit under ``implicitfast``, so a
     damping set for a heavier body makes a light one unstable. ``initial`` replaces the
     multi-start search by one start (a close law, e.g. the skin's own when fitting skin + tissue).
-    Residuals are weighted by :func:`softhand.laws.fit.force_weights` (absolute up to 2 N,
+    Residuals are weighted by `softhand.laws.fit.force_weights` (absolute up to 2 N,
     relative above); ``rms_N`` is the plain RMS force error over the whole curve.
     """
     d, f = paired_arrays(delta_mm, force_N, ("delta_mm", "force_N"), min_size=5)
