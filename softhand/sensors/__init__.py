@@ -1,8 +1,8 @@
 """Embedded sensors on the hand: transfer laws from the FE and a real sensor's behaviour.
 
-The FE stage reads the force on sensor patches inside the phalanx (:mod:`softhand.fem.sensors`);
+The FE stage reads the force on sensor patches inside the phalanx (`softhand.fem.sensors`);
 this stage fits, per design and placement, the law from the force on the skin to the patch's
-reading (:mod:`softhand.sensors.transfer`, shipped in ``calibration/sensors``), and follows it with
-a real sensor's electronics (:mod:`softhand.sensors.device`). The handshake env
-(:mod:`softhand.envs`) applies both to each sensing region's load.
+reading (`softhand.sensors.transfer`, shipped in ``calibration/sensors``), and follows it with
+a real sensor's electronics (`softhand.sensors.device`). The handshake env
+(`softhand.envs`) applies both to each sensing region's load.
 """

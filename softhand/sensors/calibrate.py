@@ -7,11 +7,11 @@ Folder layout (``calibration/sensors`` by default)::
     fe/summary.json            provenance (git revision, solver version, settings), per design
                                the patches' placements and areas, and sha256 of each record
     transfer.json              per design and placement the transfer law
-                               (:class:`~softhand.sensors.transfer.TransferLaw`) with its errors,
+                               (TransferLaw) with its errors,
                                and the provenance of the records it was fitted to
 
-The FE runs are the shipped skin curves' protocol (:data:`~softhand.sensors.transfer.FE_SETTINGS`)
-with the default 4 x 4 mm patches (:func:`softhand.fem.sensors.default_patches`).
+The FE runs are the shipped skin curves' protocol (`FE_SETTINGS`)
+with the default 4 x 4 mm patches (`softhand.fem.sensors.default_patches`).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def run_sensor_fe(designs: list[str], out_dir: str | Path, *, threads: int | Non
                   ) -> tuple[dict[str, Any], list[str], bool]:
     """Run the FE records of ``designs`` at every speed and write them (each file atomically).
 
-    ``threads`` and ``cluster`` are :func:`softhand.fem.sweep.run_sweep`'s; ``progress`` gets a
+    ``threads`` and ``cluster`` are `softhand.fem.sweep.run_sweep`'s; ``progress`` gets a
     line before each speed's sweep (whose bar, with ``show_progress``, counts the designs).
 
     Returns:

@@ -1,21 +1,21 @@
 """A real sensor's behaviour after the skin: sampling, latency, noise, threshold, saturation,
 quantization and hysteresis, applied to the transfer law's reading.
 
-Default: :data:`FLEXIFORCE_A101`, a Tekscan FlexiForce A101 thin-film piezoresistive force sensor
-(a 3.8 mm sensing circle, the size of the FE's 4 x 4 mm patch; :mod:`softhand.fem.sensors`). From
+Default: `FLEXIFORCE_A101`, a Tekscan FlexiForce A101 thin-film piezoresistive force sensor
+(a 3.8 mm sensing circle, the size of the FE's 4 x 4 mm patch; `softhand.fem.sensors`). From
 Tekscan's public A101 datasheet: standard force range 0-44 N (10 lbf, the saturation), hysteresis
 < 4.5 % of full scale, linearity within +-3 % (the FlexiForce user manual; not modelled: the
 read-out is taken as calibrated), response time < 5 us (so the electronics, not the sensor, set
 the sampling). These datasheet values were not re-checked against the current PDF (this project
-is built offline); each is a parameter of :class:`SensorSpec`.
-The electronics are named assumptions (:data:`ASSUMPTIONS`): a 10-bit ADC over the full range
+is built offline); each is a parameter of `SensorSpec`.
+The electronics are named assumptions (`ASSUMPTIONS`): a 10-bit ADC over the full range
 (quantum 44.5 / 1024 = 0.043 N), 100 Hz sampling, one sample of latency, a noise of half a quantum
 (0.02 N RMS), a threshold of 0.1 N (the reading is 0 below it). Hysteresis is off by default (the
-datasheet's bound is a worst case); :class:`SensorSpec` takes any of them.
+datasheet's bound is a worst case); `SensorSpec` takes any of them.
 
 The chain, per sensing region, at every env step (``step_s`` = frame_skip x timestep):
 
-1. the transfer law's reading R(t) of the region's load (:class:`TransferBank`);
+1. the transfer law's reading R(t) of the region's load (`TransferBank`);
 2. hysteresis: a play operator of width ``hysteresis_pct`` of full scale (the reading lags the
    load by up to half of it, low while loading, high while unloading), its band narrowing to 0
    at no load so that an unloaded sensor reads 0;
@@ -118,7 +118,7 @@ class _Share:
     """A share spline g(u) tabulated at 0.001 N steps and interpolated linearly (one np.interp
     per law and env step: the B-spline costs about 50 us for the env's 18 loads); the table's
     error, h^2/8 max|g''|, is below 1e-5 N for every shipped law (4e-6 N measured; a test), far under a 10-bit
-    quantum (0.043 N). 0 for u <= 0, linear past the fitted range (as :meth:`ElasticLaw.force`)."""
+    quantum (0.043 N). 0 for u <= 0, linear past the fitted range (as `ElasticLaw.force`)."""
 
     STEP_N = 0.001
 

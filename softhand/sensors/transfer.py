@@ -1,9 +1,7 @@
 r"""Transfer laws of the embedded sensors: what a sensor inside the skin reads for a load on it.
 
-For one design and one placement (:data:`softhand.fem.sensors.PLACEMENTS`) the law maps the
+For one design and one placement (`softhand.fem.sensors.PLACEMENTS`) the law maps the
 history of the force F(t) pressing the skin to the sensor patch's reading R(t) (N on the patch):
-
-.. math::
 
     R(t) = \int_0^t K(t - s)\, \frac{d}{ds}\, g\big(u(s)\big)\, ds, \qquad
     u = \max(F - F_0, 0), \qquad
@@ -14,14 +12,14 @@ history of the force F(t) pressing the skin to the sensor patch's reading R(t) (
   *tension* while the pocket is open: the roof's load goes down the side walls and lifts the
   base between them); about 0 elsewhere. The sensors are compression sensors (a thin-film force
   sensor reads no tension), so the law is fitted to, and judged against, the FE's reading
-  clipped at 0 (:func:`compression`);
-* ``g`` the **instantaneous share**: a monotone spline (:class:`~softhand.laws.elastic.ElasticLaw`,
+  clipped at 0 (`compression`);
+* ``g`` the **instantaneous share**: a monotone spline (`ElasticLaw`,
   the skin laws' own, with the load in N on its axis instead of a depth in mm), so that
   ``dg/du`` at small loads is the sensor's sensitivity (reading per newton);
 * ``K`` the **share's relaxation**: how the reading changes against the load while it is held.
   The coefficients ``c_k`` may have either sign: the reading can relax more than the load (the
   load spreads away from a bone patch) or less (it concentrates under the outer layer); the
-  recursion is the one Prony update of the whole package (:meth:`Prony.step_factors`).
+  recursion is the one Prony update of the whole package (`Prony.step_factors`).
 
 The law is fitted to the FE's readings under the paper's protocol (a rigid plate at 0.5 mm/s to
 20 N, a 10 s hold; ``calibration/sensors/fe``), ``F`` being the plate force, and validated on the
@@ -29,7 +27,7 @@ same protocol at 2 mm/s. Assumption (stated wherever a reading is used on the ha
 load is spread over the phalanx as the plate's is, and the share's relaxation measured at a held
 indentation also holds for the load histories of a handshake.
 
-Errors (:class:`TransferError`) are in percent of the reading at the peak of the ramp (20 N), so
+Errors (`TransferError`) are in percent of the reading at the peak of the ramp (20 N), so
 that a designer reads them against the sensor's span: RMS over the whole record, the largest on the
 ramp, the largest in the hold; and, for the light touches of a handshake, the RMS on the ramp up
 to 2 N of load in percent of the reading at 2 N.
@@ -122,7 +120,7 @@ def records_csv(rec: SensorRecord) -> str:
 
 def load_records(fe_dir: str | Path, design: str, speed_mm_s: float,
                  meta: dict[str, Any]) -> SensorRecord:
-    """Read ``{design}.csv`` of one speed folder (see :func:`softhand.sensors.calibrate`).
+    """Read ``{design}.csv`` of one speed folder (see `softhand.sensors.calibrate`).
 
     Args:
         meta: the folder's ``summary.json`` entry of the design: ``placements`` and ``area_mm2``.
@@ -208,7 +206,7 @@ class ShareKernel:
         return self.k_inf
 
     def step_factors(self, dt_s) -> tuple[np.ndarray, np.ndarray]:
-        """The package's one hereditary recursion (:meth:`Prony.step_factors`) for these times."""
+        """The package's one hereditary recursion (`Prony.step_factors`) for these times."""
         return Prony((0.0,) * len(self.tau_s), self.tau_s).step_factors(dt_s)
 
     def response(self, g: np.ndarray, t_s: np.ndarray) -> np.ndarray:
@@ -276,7 +274,7 @@ class TransferLaw:
 
     @classmethod
     def from_dict(cls, d: Any, *, key: str = "law") -> TransferLaw:
-        """Parse :meth:`to_dict` output, checking every value; ValueError names the key path."""
+        """Parse `to_dict` output, checking every value; ValueError names the key path."""
         check_mapping(key, d, required=("design", "placement", "area_mm2", "dead_band_N",
                                         "max_load_N", "share", "kernel"),
                       optional=("fitted", "validated", "source"))
