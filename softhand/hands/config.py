@@ -177,10 +177,11 @@ class SceneConfig:
     Attributes:
         prosthetic: the prosthetic hand.
         partner: the partner's hand.
-        timestep_s: simulation time step (s), in [0.0001, 0.005] (:data:`TIMESTEP_RANGE_S`; the
+        timestep_s: simulation time step (s), in [0.0001, 0.005] (`TIMESTEP_RANGE_S`; the
             skins are calibrated and tested at 0.0005-0.002 and warn outside it). Default 2 ms: the
-            handshake's region forces agree with 0.5 ms within a few percent (``softhand bench
-            handshake``) at 1.8x the speed of 1 ms.
+            handshake's region forces agree with 0.5 ms within a few percent, and it runs faster
+            than 1 ms (both measured by ``softhand bench handshake``,
+            ``reports/bench-handshake.md``).
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
         prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
         crossing_angle_deg: starting angle of the grasp solve (softhand.hands.grasp) between the

@@ -1,7 +1,7 @@
 """The soft envelope of a hand as one layer of convex pieces: where skin (prosthetic) or tissue
 (partner) lies over the bones, with no piece inside another at rest.
 
-Both hands use the same pieces, built from the layout (:mod:`softhand.hands.layout`):
+Both hands use the same pieces, built from the layout (`softhand.hands.layout`):
 
 - every phalanx and the thumb metacarpal (thenar): a capsule of the segment's envelope radius R
   *trimmed* to the segment, i.e. from R to L - R along its axis, so that it spans exactly the
@@ -17,7 +17,7 @@ Both hands use the same pieces, built from the layout (:mod:`softhand.hands.layo
   overlap.
 
 Each piece is returned in its body's frame (the hand frame for the palm, the digit frame for a
-phalanx; :mod:`softhand.hands.skeleton`). Joint flexion folds two trimmed capsules into each
+phalanx; `softhand.hands.skeleton`). Joint flexion folds two trimmed capsules into each
 other on the flexor side (as real finger creases do); tests/test_hands.py measures that depth over
 a grid of postures.
 """

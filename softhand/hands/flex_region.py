@@ -2,12 +2,12 @@
 
 The ``flex`` representation cannot join the handshake: MuJoCo 4 integrates flex elasticity only
 under the ``discrete`` integrator, under which the hand's calibrated soft contacts do not hold
-(:mod:`softhand.skin.representations`). So a flex region lives in a scene that models only what
+(`softhand.skin.representations`). So a flex region lives in a scene that models only what
 it needs: the prosthetic hand alone, fixed at the wrist, one digit held in a posture by its
 motor, a flex pad on one phalanx region and a rigid plate pressing it along the pad's normal.
 No other contact exists in the scene, so every newton on the plate comes from the pad.
 
-The pad is the calibrated flex of the skin (:class:`softhand.skin.flex.FlexPadParams`, fitted to
+The pad is the calibrated flex of the skin (`softhand.skin.flex.FlexPadParams`, fitted to
 the design's FE loading curve on a world-fixed base): the paper's phalanx, 16 mm wide, 9 mm high
 and 10 mm long, its flat base on the plane through the phalanx's axis (the capsule skins of the
 prosthetic phalanges are 15-20 mm across, so the pad is the palmar half of the segment; its apex
@@ -19,7 +19,7 @@ solver). The region's own skin geom is hidden. Gravity is off, as in the FE and 
 Indentation is what the pad feels: its height minus the distance from the pad's base plane (on
 the phalanx) to the plate's face, so the finger's give under the motor does not enter it (the
 rig's convention). Force: the plate's normal contact forces. Contact area and pressure:
-:func:`softhand.skin.flex.contact_patch`. Postures: ``extended`` (every joint of the digit at 0)
+`softhand.skin.flex.contact_patch`. Postures: ``extended`` (every joint of the digit at 0)
 and ``flexed`` (the digit's motor at half its range, the coupled joints following).
 """
 
@@ -71,7 +71,7 @@ def build_flex_region(params: FlexPadParams, region: str = "Index3", *,
                       timestep: float = 1e-3, prefix: str = "pro_") -> mujoco.MjModel:
     """Compile the hand with the flex pad (``flexpad``) on ``region`` and the plate (body
     ``plate``, slide joint ``plate_z`` along the pad's outward normal, servo ``plate_servo``),
-    the plate's face on the pad's apex in the extended posture (:func:`press_flex_region`
+    the plate's face on the pad's apex in the extended posture (`press_flex_region`
     re-places it for the posture).
 
     Raises:
@@ -133,12 +133,12 @@ class FlexPress:
 
     Attributes:
         region, posture: where and how the hand was held.
-        curve: simulated :class:`~softhand.laws.fit.Curve` (indentation the pad feels, plate
+        curve: simulated `Curve` (indentation the pad feels, plate
             force; ``stats``: ``steps``, ``step_us`` in ``mj_step`` alone, ``nv``).
         area_mm2, inner_area_mm2: the contact patch's area bounds at each curve sample.
         patch: the contact patch at the last sample (the peak force).
         model, qpos: the scene (the plate placed for the posture) and its state at the last
-            sample, for a picture (:func:`softhand.viz.render.render_state`).
+            sample, for a picture (`softhand.viz.render.render_state`).
         lookat_m: the pad's base centre in the world at the last sample.
     """
 

@@ -15,7 +15,7 @@ A handshake is defined by its contacts, not by a clearance rule. Descriptions us
 - assumption (no published kinematic description found): each thumb lies over the back of the
   other hand's index metacarpal and first web space, the usual clinical and etiquette description.
 
-Targets (residuals of a least-squares problem, lengths in m; :func:`solve_grasp`):
+Targets (residuals of a least-squares problem, lengths in m; `solve_grasp`):
 
 ============== ============================================================================
 palms          each prosthetic palmar piece (Palm1, Palm2) touches the partner's palmar tissue,
@@ -268,7 +268,7 @@ class _Problem:
             self._moved = (d.geom_xpos != xpos).any(axis=1) | (d.geom_xmat != xmat).any(axis=1)
 
     def distance(self, g1: int, g2: int, cap: float = 0.05) -> float:
-        """The pair's signed distance capped at ``cap`` (m). Inside :meth:`jacobian` a pair
+        """The pair's signed distance capped at ``cap`` (m). Inside `jacobian` a pair
         whose two geoms have not moved from the reference state is measured once."""
         if self._moved is None or self._moved[g1] or self._moved[g2]:
             return mujoco.mj_geomDistance(self.m, self.d, g1, g2, cap, self.dist)
@@ -360,7 +360,7 @@ class _Problem:
         return _in_frame(self.d, body, point)
 
     def pad(self, prefix: str, digit: str) -> np.ndarray:
-        """World position of a digit's pad (as :func:`_pad`)."""
+        """World position of a digit's pad (as `_pad`)."""
         body, local = self.pads[prefix, digit]
         return self.hand_point(body, local)
 
@@ -535,7 +535,7 @@ def _code_digest() -> str:
 
 def _cache_path(config: SceneConfig, settings: GraspSettings) -> Path | None:
     """Where the grasp of ``config`` and ``settings`` is cached (softhand.paths.cache_dir), keyed
-    by both (their repr: every field, floats exactly) and by :func:`_code_digest`; None: no
+    by both (their repr: every field, floats exactly) and by `_code_digest`; None: no
     cache."""
     root = cache_dir()
     if root is None:
@@ -593,7 +593,7 @@ def _couple(model: mujoco.MjModel, data: mujoco.MjData,
             couplings: list[tuple[int, int, float, float]] | None = None) -> None:
     """Set every joint coupled by a joint equality (q1 = c0 + c1 q2, the prosthetic's couplings)
     from its driver in ``data.qpos``, in the equalities' order (a coupled joint may drive
-    another); ``couplings``: :func:`_couplings` of the model, when known."""
+    another); ``couplings``: `_couplings` of the model, when known."""
     qpos = data.qpos
     for a1, a2, c0, c1 in _couplings(model) if couplings is None else couplings:
         qpos[a1] = c0 + c1 * qpos[a2]

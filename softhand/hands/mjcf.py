@@ -2,7 +2,7 @@
 
 The files are outputs, never edited by hand: write_mjcf() rebuilds them from the default configs.
 The handshake scene with its calibrated skins (``handshake_scene.xml``) needs the skin laws, a
-later stage: :func:`softhand.envs.models.write_models` writes it together with these two, and
+later stage: `softhand.envs.models.write_models` writes it together with these two, and
 tests/test_envs.py checks that the shipped files equal a fresh build. Regenerate from the
 repository root with
 ``python -c "from softhand.envs.models import write_models; write_models('models/mjcf')"``.

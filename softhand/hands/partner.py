@@ -8,15 +8,15 @@ with human joint ranges ([AAOS65], constants.AAOS_RANGE_DEG, hyperextension incl
 Actuation: joint impedance, 18 position servos (ctrl is a target angle in rad): one per digit
 joint (``{prefix}{joint}`` for each of PARTNER_JOINTS: thumb rot, cmc, mcp, ip; each finger's mcp,
 pip, dip), then ``wrist_flex`` and ``wrist_dev``. The env's partner script
-(:mod:`softhand.envs.partner`) sets the targets: an open hand on the reach, the solved grasp
-posture (:mod:`softhand.hands.grasp`) plus a grip effort (a flexion offset on every digit joint,
+(`softhand.envs.partner`) sets the targets: an open hand on the reach, the solved grasp
+posture (`softhand.hands.grasp`) plus a grip effort (a flexion offset on every digit joint,
 regulated to the sampled grip force) while it holds the other hand. A servo's stiffness is
 PartnerConfig.finger_kp_nm_per_rad x JOINT_KP_SHARE of its joint; torques are capped at the
 maximal grip force shared by four fingers acting at the proximal phalanx ([Mathiowetz85]).
 
 Contact geoms: ``tissue_{piece}`` (contype = conaffinity = 0: contacts only through explicit
 ``<pair>`` elements): the hand's soft envelope as one layer of convex pieces
-(:mod:`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
+(`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
 on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull as one piece,
 ``tissue_palm`` (palmar and dorsal sides and borders: the grasp's fingers wrap the ulnar border,
 where a seam between two pieces resisted one indentation twice). No point lies inside two tissue

@@ -21,7 +21,7 @@ setpoint (actuator activation, clamped to the joint range) is held by a stiff se
 where it stopped under load, like a worm gear; the servo force is clamped to the stall torque
 grip_force / 5 x digit length / 2 (the power grip shared by five digits acting at mid-length).
 
-Skin (:mod:`softhand.hands.envelope`): the hand's whole soft envelope is skin, one layer of convex
+Skin (`softhand.hands.envelope`): the hand's whole soft envelope is skin, one layer of convex
 pieces with no piece inside another at rest: a trimmed capsule on every phalanx and on the thumb
 metacarpal (the thenar), and the palm's convex hull cut into four quarters (palmar / dorsal x
 proximal / distal), each a convex mesh. Every piece is a geom ``skin_{Name}`` with
