@@ -1,7 +1,7 @@
 """The batched physics backend: W handshake scenes stepped together by ``mujoco.batch``.
 
-:class:`BatchPhysics` implements the seam of :class:`~softhand.envs.physics.MujocoPhysics` over
-arrays with a leading world axis, for the vector env (:mod:`softhand.envs.vector`):
+`BatchPhysics` implements the seam of `MujocoPhysics` over
+arrays with a leading world axis, for the vector env (`softhand.envs.vector`):
 
 ============================== =====================================================================
 ``reset(worlds, pos, quat, …)`` MuJoCo's reset of the given worlds, their mounts placed, motors
@@ -9,7 +9,7 @@ arrays with a leading world axis, for the vector env (:mod:`softhand.envs.vector
 ``ctrl``                       (W, nu) the worlds' controls, written before ``advance``
 ``advance(live, mount_paths)`` one action period of the ``live`` worlds: ``frame_skip`` steps,
                                each world's mount on its path (W, frame_skip, 3); returns a
-                               :class:`~softhand.envs.physics.Divergence` or None per world
+                               `Divergence` or None per world
 ``region_forces()``            (W, regions) force (N) of each region, and the bones' part
 ``saturated_sensors()``        (W,) region sensors that matched more contacts than slots
 ``partner_feel()``             (W, phalanges) net force on each of the partner's phalanx tissues
@@ -96,7 +96,7 @@ class BatchPhysics:
         models: one compiled scene per world (the same object may serve several worlds).
         frame_skip: physics steps per action (>= 1).
         region_sensors, feel_sensors, mocap_body, bone_sensors: as
-            :class:`~softhand.envs.physics.MujocoPhysics` (the same names in every world).
+            `MujocoPhysics` (the same names in every world).
         nthread: threads per Batch (default: the CPUs this process may run on).
     """
 
@@ -124,7 +124,7 @@ class BatchPhysics:
                 ms[0], region_sensors, feel_sensors, bone_sensors)))
         self._mocap = np.array([m.body(mocap_body).mocapid[0] for m in self.models])
         self._timestep = np.array([m.opt.timestep for m in self.models])
-        #: why each world's last :meth:`advance` diverged (None: it did not)
+        #: why each world's last `advance` diverged (None: it did not)
         self.divergence: list[Divergence | None] = [None] * self.num_worlds
 
     # --- state ---------------------------------------------------------------------------------
@@ -180,9 +180,9 @@ class BatchPhysics:
 
     def advance(self, live: np.ndarray, mount_paths: np.ndarray) -> list[Divergence | None]:
         """``frame_skip`` steps of the worlds where ``live`` (W,) is True, with the controls
-        already in :meth:`set_ctrl`, world w's mount at ``mount_paths[w, i]`` on step i (shape
+        already in `set_ctrl`, world w's mount at ``mount_paths[w, i]`` on step i (shape
         (W, frame_skip, 3)); sensors computed on the last step only. Returns, per world, None or
-        the :class:`Divergence` that stopped it (None for worlds not stepped)."""
+        the `Divergence` that stopped it (None for worlds not stepped)."""
         live = np.asarray(live, bool).copy()
         self.divergence = [None] * self.num_worlds
         last_good = self.time

@@ -5,13 +5,13 @@ thumb flexion, thumb rotation; positive closes): ``ctrl(obs, info)`` for a singl
 ``ctrl.actions(obs, info, region_names)`` for W worlds of the vector env (softhand.envs.vector)
 at once, with per-world state; both are the same array code (one world for a single env):
 
-* :class:`OpenLoopClose`: rotate the thumb to its handshake posture, close every digit at a fixed
+* `OpenLoopClose`: rotate the thumb to its handshake posture, close every digit at a fixed
   speed for a fixed time once the partner grips, hold, open when it lets go (what a myoelectric
   user does with one short "close" signal).
-* :class:`ForceRegulating`: per digit, close until the force of that digit's most loaded region
+* `ForceRegulating`: per digit, close until the force of that digit's most loaded region
   reaches a target grip force, open a little when over it (a proportional force loop on the region
   forces); the thumb rotates to its handshake posture.
-* :class:`Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
+* `Neutral`: the paper's sensored hand (the experimenter's "neutral handshake: minimal grip,
   waiting for the partner"): per digit, close until the digit first touches the partner, then hold
   that posture (the motors are not back-drivable) until the partner lets go; the thumb rotates to
   the grasp's rotation and closes over the back of the partner's index metacarpal. The default of
@@ -105,7 +105,7 @@ def _thumb_to_handshake(w: _Worlds) -> np.ndarray:
 class _Controller:
     """A controller's two entries: ``ctrl(obs, info)`` for a single env (one action (6,)), and
     ``ctrl.actions(obs, info, region_names)`` for the vector env (W actions (W, 6), ``info`` its
-    arrays); both run :meth:`_act` over arrays of worlds, which keeps each world's state."""
+    arrays); both run `_act` over arrays of worlds, which keeps each world's state."""
 
     signal: str | None = None
 
@@ -142,7 +142,7 @@ class OpenLoopClose(_Controller):
     into it until the command stops (up to its stall torque), which is what an open loop does
     (0.35 s, the earlier default, stopped every finger 19 deg in, short of the partner).
 
-    Settings: ``speed`` in (0, 1], ``close_s`` in (0, 6] s (:data:`CLOSE_S_RANGE`)."""
+    Settings: ``speed`` in (0, 1], ``close_s`` in (0, 6] s (`CLOSE_S_RANGE`)."""
 
     speed: float = 0.6
     close_s: float = 0.8

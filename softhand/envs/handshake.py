@@ -1,6 +1,6 @@
 """``softhand/Handshake-v0``: a prosthetic hand with calibrated skins shakes hands with a human partner.
 
-The docstring of :class:`HandshakeEnv` is the specification. The env is the two-hand touch env
+The docstring of `HandshakeEnv` is the specification. The env is the two-hand touch env
 (softhand.envs.touch) with the handshake scenario (softhand.envs.scenarios.handshake).
 """
 
@@ -32,13 +32,13 @@ class HandshakeEnv(TwoHandTouchEnv):
     (Fig. 1: Thumb1-2, Index1-3, Middle1-3, Ring1-3, Little1-3, Palm1-2, Back1-2; 1 = proximal).
     The partner reaches with an open hand, slides its web space into the prosthetic's (whose
     thumb is pre-rotated to the grasp), closes to its grasp posture and grips to a human grip
-    force, shakes at 4 Hz, lets go and leaves (:mod:`softhand.envs.partner`, published timings).
+    force, shakes at 4 Hz, lets go and leaves (`softhand.envs.partner`, published timings).
     The grasp, both postures and the partner's pose, is solved from the handshake's contacts
-    (:mod:`softhand.hands.grasp`: palms together, web spaces together, each thumb over the back of
+    (`softhand.hands.grasp`: palms together, web spaces together, each thumb over the back of
     the other's index metacarpal, the fingers wrapped round the other's ulnar border). Its hand
     rides a compliant arm (a soft weld to the scripted target); its size is ``partner_size``.
     The prosthetic hand's whole envelope is skin (the 18 regions and
-    the non-sensing thenar; :mod:`softhand.hands.envelope`), the partner's is one layer of tissue;
+    the non-sensing thenar; `softhand.hands.envelope`), the partner's is one layer of tissue;
     every contact between them is a calibrated soft contact (the skin in series with human tissue,
     fitted to 20 N, calibrated to 7 N: contacts above that are counted every step in ``info`` and
     summarised once per episode, see Warnings below). Each region's reading is a contact sensor on its skin's contacts
@@ -48,7 +48,7 @@ class HandshakeEnv(TwoHandTouchEnv):
 
     Action space: ``Box(-1, 1, (6,), float32)``, motor speed as a fraction of the maximum
     (positive closes; 1 = full speed, which closes a digit from open in about 1 s). Each entry's
-    name and unit is in ``env.unwrapped.action_names`` (:mod:`softhand.envs.spaces`):
+    name and unit is in ``env.unwrapped.action_names`` (`softhand.envs.spaces`):
 
     ===== ============================================ ===================================
     index name                                         drives
@@ -91,12 +91,12 @@ class HandshakeEnv(TwoHandTouchEnv):
     last               episode_fraction [-]       time since the start / handshake duration
     ================== ========================== ================================================
 
-    Embedded sensors (:mod:`softhand.envs.sensing`): each region's sensor sits under its skin at
+    Embedded sensors (`softhand.envs.sensing`): each region's sensor sits under its skin at
     ``sensor_placement`` (default ``interface``, under the outer layer; ``bone``;
     ``pocket-floor`` for pocketed designs; skins without an FE model get an ideal ``surface``
     sensor) and reads the force on its 4 x 4 mm patch (N): the design's transfer law of the
     region's contact force (calibration/sensors/transfer.json: sensitivity, the pocket's dead
-    band, the reading's relaxation), then ``sensor``'s electronics (:class:`SensorSpec`, default
+    band, the reading's relaxation), then ``sensor``'s electronics (`SensorSpec`, default
     a FlexiForce A101 with a 10-bit ADC at 100 Hz: latency, seeded noise, threshold, saturation,
     quantization, optional hysteresis), resolved to the env step (frame_skip x timestep_s).
     The reward uses the true contact forces.
@@ -123,8 +123,8 @@ class HandshakeEnv(TwoHandTouchEnv):
     Timestep: allowed 0.1-5 ms (``TIMESTEP_RANGE_S``); the skins are calibrated for 0.5-2 ms
     (their rest laws hold at every step in that range) and warn (``SkinRangeWarning``) outside it.
     2 ms, the default, reproduces the region forces of 0.5 ms within a few percent for all three
-    controllers and runs about 1.8x faster than 1 ms (``softhand bench handshake``: speed and
-    error against 0.5 ms for each timestep).
+    controllers and runs faster than 1 ms (``softhand bench handshake``, speed and error against
+    0.5 ms for each timestep: ``reports/bench-handshake.md``).
 
     ``info``: ``region_forces_N`` (dict region -> N, the true contact forces, always: the
     region's skin inside its sensor zone and its bone bottoming out there, flagged in
@@ -152,22 +152,23 @@ class HandshakeEnv(TwoHandTouchEnv):
     ``time_s``. At construction, skin pairs outside their calibration (a timestep outside
     0.5-2 ms) give one ``SkinRangeWarning``: per kind of problem, how many pairs and the worst.
 
-    Skin representations (:mod:`softhand.skin.representations`; ``representation`` for every
+    Skin representations (`softhand.skin.representations`; ``representation`` for every
     region, ``skins`` values ``DESIGN@REPRESENTATION`` for one):
 
     * ``soft-contact`` (default): each pair carries the skin's law in series with the tissue's in
       its solref/solimp (no memory: the 0.5 mm/s loading curve);
     * ``soft-contact+relaxation``: each skin geom rides a relaxation pad (a slide joint along its
       outward normal, the QLV law's spline spring and Maxwell branches, joint armature 10 g,
-      :class:`~softhand.skin.representations.HandPad`), its pairs carry the tissue's law alone
+      `HandPad`), its pairs carry the tissue's law alone
       (skin and tissue in series mechanically). Runs under the scene's ``implicitfast`` at
-      0.5-2 ms, at about twice the cost (2 Prony terms x 6 branch knots + 1 dofs per skin geom);
+      0.5-2 ms, at a higher cost per step (2 Prony terms x 6 branch knots + 1 dofs per skin geom;
+      its cost against ``rigid``: ``softhand bench handshake``, ``reports/bench-handshake.md``);
       refused above 2 ms, the timestep its pads are tested at under a hard grip (their
       explicitly integrated spring is stable inside the calibrated 7 N up to 2.48-2.96 ms, but a
       squeeze-5 grip loads regions to 12-45 N: ``softhand.envs.skins.check_pad_timestep``).
       The pad compresses along its normal only: a contact from the side (the palm's borders, a
-      thumb's side) meets the tissue's law alone, and the force accounting says so
-      (HandshakeRun.force_accounting; 63 % of the force in the default scene,
+      thumb's side) meets the tissue's law alone, and the force accounting says how much of the
+      force went through the pads (HandshakeRun.force_accounting,
       ``softhand handshake --representation soft-contact+relaxation --json``);
       HandshakeRun.relaxation() measures each pad against the QLV law;
     * ``rigid``: MuJoCo's stock contact against the tissue (only the tissue indents).
@@ -199,8 +200,8 @@ class HandshakeEnv(TwoHandTouchEnv):
             shipped ones); every skin used is read and checked before the scene is built.
         randomize: True or False: vary the partner (timing +-5 %, grip +-10 %, shake phase)
             from the seed.
-        sensor: the sensors' electronics, a :class:`SensorSpec` (default
-            :data:`FLEXIFORCE_A101`); the noise is drawn from the episode's seed.
+        sensor: the sensors' electronics, a `SensorSpec` (default
+            `FLEXIFORCE_A101`); the noise is drawn from the episode's seed.
         sensor_placement: one placement for every region (``bone``, ``interface`` or
             ``pocket-floor``), or a mapping region -> placement (the rest ``interface``).
         observe: ``sensor`` (default: the sensor patches' readings), ``load`` (the calibrated
@@ -220,35 +221,35 @@ class HandshakeEnv(TwoHandTouchEnv):
             default the experimenter's 190 x 88 mm. The grasp is solved for this pair of hands.
         contact_laws: ``geometry`` (default): each skin pair takes the law of its contact class,
             its two geoms' shapes (a phalanx or a palm piece, pressed by a finger or a flat;
-            :mod:`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate
+            `softhand.skin.contact_classes`); ``plate``: every pair the paper's plate
             protocol. ``env.unwrapped.pair_laws`` names the law of every pair.
-        render_mode: None (default) or ``rgb_array``: :meth:`render` returns the state as an
+        render_mode: None (default) or ``rgb_array``: `render` returns the state as an
             (H, W, 3) uint8 picture, ``softhand render``'s (offscreen ``mujoco.Renderer``; needs
             ``MUJOCO_GL=egl`` or ``osmesa`` set before mujoco is imported, without a display),
             one per env step at ``metadata["render_fps"]`` (100 by default), so that Gymnasium's
             wrappers take it (``RenderCollection``; ``RecordVideo`` with moviepy installed).
         render_size: (width, height) of the picture, each 64-4096 pixels; default (640, 480).
-        render_view: the camera, a :class:`~softhand.envs.picture.CameraView`; default
+        render_view: the camera, a `CameraView`; default
             ``softhand render``'s (``RENDER_VIEW``: azimuth 150 deg, elevation -30 deg, 0.3 m
             from the hands).
 
     Raises:
         ValueError: at construction, a bad argument or calibration file, naming it, the value
-            and the allowed range, before any model is built; in :meth:`reset`, a bad seed or
+            and the allowed range, before any model is built; in `reset`, a bad seed or
             option (``options``: ``grip_N`` per phalanx in [1e-6, 12.5] N, ``duration_s`` in
-            [2, 6] s, ``shake_phase_rad`` in [-2 pi, 2 pi]); in :meth:`step`, an action that is not
+            [2, 6] s, ``shake_phase_rad`` in [-2 pi, 2 pi]); in `step`, an action that is not
             6 finite real numbers in [-1, 1] (a numpy masked array with masked entries included:
             the data under a mask is arbitrary).
-        RuntimeError: :meth:`step` before :meth:`reset` or after the episode ended;
-            :meth:`step`, :meth:`reset` or :meth:`render` after :meth:`close`; :meth:`render`
+        RuntimeError: `step` before `reset` or after the episode ended;
+            `step`, `reset` or `render` after `close`; `render`
             without a render mode.
 
-    Physics: every MuJoCo call of an episode goes through :attr:`physics`
-    (:class:`~softhand.envs.physics.MujocoPhysics`), the seam the batched backend implements
-    (:class:`~softhand.envs.batch.BatchPhysics`, for ``gymnasium.make_vec(...,
-    vectorization_mode="vector_entry_point")``: :class:`~softhand.envs.vector.HandshakeVectorEnv`).
-    Structure: this is the generic :class:`~softhand.envs.touch.TwoHandTouchEnv` with the
-    handshake scenario (:attr:`scenario`, :class:`~softhand.envs.scenarios.HandshakeScenario`:
+    Physics: every MuJoCo call of an episode goes through `physics`
+    (`MujocoPhysics`), the seam the batched backend implements
+    (`BatchPhysics`, for ``gymnasium.make_vec(...,
+    vectorization_mode="vector_entry_point")``: `HandshakeVectorEnv`).
+    Structure: this is the generic `TwoHandTouchEnv` with the
+    handshake scenario (`scenario`, `HandshakeScenario`:
     the partner's script, the phases, the reward); another touch is another scenario.
 
     Version history: v0 (softhand 0.1, unreleased): first release; before the release the default

@@ -1,8 +1,8 @@
 """The simulated handshake scene as MJCF: both hands with their calibrated skins in the spec.
 
-:func:`skinned_scene_spec` is the one builder of the scene the environment simulates: the hands'
-scene (:func:`softhand.hands.scene_spec`) plus every skin pair with its law written into the spec
-(:func:`softhand.envs.skins.write_skin_laws`). Its MJCF, ``models/mjcf/handshake_scene.xml`` for
+`skinned_scene_spec` is the one builder of the scene the environment simulates: the hands'
+scene (`softhand.hands.scene_spec`) plus every skin pair with its law written into the spec
+(`softhand.envs.skins.write_skin_laws`). Its MJCF, ``models/mjcf/handshake_scene.xml`` for
 the default skins (pocket2-sil everywhere), loads in plain MuJoCo as the model the environment
 steps (a test replays an episode on it). Regenerate the files from the repository root with
 ``python -c "from softhand.envs.models import write_models; write_models('models/mjcf')"``.
@@ -34,7 +34,7 @@ def skinned_scene_spec(skins: Mapping[str, str] | None = None, config: SceneConf
                        directory: str | os.PathLike = SKINS_DIR,
                        contact_laws: str = "geometry") -> mujoco.MjSpec:
     """The handshake scene with every skin, pair and law (default skins and representations:
-    :func:`parse_skins`; ``contact_laws``: :data:`softhand.envs.skins.CONTACT_LAWS`)."""
+    `parse_skins`; ``contact_laws``: `softhand.envs.skins.CONTACT_LAWS`)."""
     spec = scene_spec(config or SceneConfig())
     if skins is None:
         skins, default_reps = parse_skins()

@@ -138,7 +138,7 @@ class PartnerScript:
     sets so that the force its digits feel follows ``grip_force_N``; on release the effort goes
     and the hand opens.
 
-    Args (one world's plan; :meth:`stack` makes W worlds of W one-world scripts):
+    Args (one world's plan; `stack` makes W worlds of W one-world scripts):
         timeline: phase durations.
         start_pos, contact_pos: mount positions (m); the orientation stays fixed.
         grip_force_N: target of the grip measure the env feeds grip(): the summed normal force
@@ -224,7 +224,7 @@ class PartnerScript:
         return self.mounts(np.array([t], float))[0]
 
     def grip(self, t: float, grip_force_N: float, dt: float) -> np.ndarray:
-        """One world's digit joint targets (:meth:`grips`)."""
+        """One world's digit joint targets (`grips`)."""
         return self.grips(np.array([t], float), np.array([grip_force_N], float), dt)[0]
 
     def mounts(self, t: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
@@ -399,7 +399,7 @@ class RelaxedHand:
     drives of a ``relaxed-human`` hand. Open on the reach with the thumb rotated to the grasp,
     closing to the grasp posture (``grasp_q``, solved from the handshake's contacts) in CLOSE_S
     once the partner arrives, holding it through the shake, opening in 0.2 s from the release; the
-    thumb keeps its rotation. One world, or W worlds at once (:meth:`stack`, :meth:`targets_at`).
+    thumb keeps its rotation. One world, or W worlds at once (`stack`, `targets_at`).
 
     Args:
         timeline: the episode's phases.

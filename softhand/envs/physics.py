@@ -1,14 +1,14 @@
 """The physics of the handshake env, behind one seam: what a batched backend would implement.
 
-:class:`TwoHandTouchEnv <softhand.envs.touch.TwoHandTouchEnv>` and its scenario keep the
+`TwoHandTouchEnv` and its scenario keep the
 partner's script, the controllers' interface, the reward and the observation; everything that
-touches MuJoCo's state during an episode goes through :class:`MujocoPhysics`:
+touches MuJoCo's state during an episode goes through `MujocoPhysics`:
 
 ============================== =====================================================================
 ``reset(mount_pos, quat, ...)``MuJoCo's reset, the partner's mount placed, motors pre-shaped
 ``advance(ctrl, mount_path)``  one action period: ``frame_skip`` steps, the mount following its
                                prescribed path (one row per step), sensors read on the last step;
-                               returns None, or the :class:`Divergence` that ended it
+                               returns None, or the `Divergence` that ended it
 ``region_forces()``            force (N) of each region: its skin's contact sensor and its bones
                                bottoming out under it; and the bones' part
 ``saturated_sensors()``        region sensors that matched more contacts than they have slots
@@ -18,12 +18,12 @@ touches MuJoCo's state during an episode goes through :class:`MujocoPhysics`:
 ``qpos``, ``qvel``, ``time``   the state
 ============================== =====================================================================
 
-:class:`softhand.envs.batch.BatchPhysics` implements the same methods over arrays with a leading
+`softhand.envs.batch.BatchPhysics` implements the same methods over arrays with a leading
 world axis (``mujoco.batch``: W worlds on threads), for the vector env (softhand.envs.vector); the
 partner's script, the controllers and the reward run over those arrays
-(:class:`~softhand.envs.scenarios.handshake.HandshakeWorlds`), the single env being one world.
-Both backends read the sensors (:class:`SensorLayout`), diagnose a divergence (:func:`diagnose`)
-and check the contacts' ranges (:func:`contacts_above`) with the same functions. Timings of the
+(`HandshakeWorlds`), the single env being one world.
+Both backends read the sensors (`SensorLayout`), diagnose a divergence (`diagnose`)
+and check the contacts' ranges (`contacts_above`) with the same functions. Timings of the
 handshake are of this class's ``advance``.
 """
 
@@ -72,11 +72,11 @@ class Divergence:
 
 
 class DivergenceError(RuntimeError):
-    """A run's simulation diverged (:class:`Divergence`): raised by the runs (e.g.
-    :func:`softhand.envs.run.run_handshake`) instead of continuing from MuJoCo's reset state.
+    """A run's simulation diverged (`Divergence`): raised by the runs (e.g.
+    `softhand.envs.run.run_handshake`) instead of continuing from MuJoCo's reset state.
 
     Attributes: ``divergence``, ``skins`` and ``representations`` (region -> name), and
-    ``timestep_s``; :attr:`summary` says all but the advice, which ``str()`` adds.
+    ``timestep_s``; `summary` says all but the advice, which ``str()`` adds.
     """
 
     def __init__(self, divergence: Divergence, *, skins: Mapping[str, str],
@@ -128,7 +128,7 @@ class MujocoPhysics:
         self.ctrl, self._sensordata = self.data.ctrl, self.data.sensordata
         self.qpos, self.qvel = self.data.qpos, self.data.qvel
         self._warnings = self.data.warning.number  # MuJoCo's warning counters (a view)
-        #: why the last :meth:`advance` diverged (None: it did not, or no step since reset)
+        #: why the last `advance` diverged (None: it did not, or no step since reset)
         self.divergence: Divergence | None = None
 
     @property
@@ -152,11 +152,11 @@ class MujocoPhysics:
         mujoco.mj_forward(m, d)
 
     def advance(self, mount_path: np.ndarray) -> Divergence | None:
-        """``frame_skip`` steps with the controls already in :attr:`ctrl`, the mount at
+        """``frame_skip`` steps with the controls already in `ctrl`, the mount at
         ``mount_path[i]`` on step i (shape (frame_skip, 3)). Sensors are computed on the last
         step only: they do not act on the dynamics (35 contact sensors, read once per action).
 
-        Returns None, or the :class:`Divergence` that stopped it: MuJoCo reset the data after a
+        Returns None, or the `Divergence` that stopped it: MuJoCo reset the data after a
         bad position, velocity or acceleration (its time went back; checked every step, and the
         action period stops there), MuJoCo raised another warning (full contact or constraint
         buffer, bad control, bad inertia), or the state is not finite. The state is then not a
@@ -229,7 +229,7 @@ class SensorLayout:
     """Where the regions' contact sensors, their bones' and the partner's feel sensors sit in
     ``sensordata``; reads one world's sensordata (1-D) or many worlds' at once (rows).
 
-    Args: as :class:`MujocoPhysics`.
+    Args: as `MujocoPhysics`.
     """
 
     def __init__(self, m: mujoco.MjModel, region_sensors: list[str], feel_sensors: list[str],
@@ -319,7 +319,7 @@ def _name(model: mujoco.MjModel, kind: mujoco.mjtObj, i: int) -> str:
 def mujoco_warnings_kept() -> Iterator[list[str]]:
     """MuJoCo's warnings kept in a list (yielded) instead of printed and appended to
     ``MUJOCO_LOG.TXT`` in the working folder, MuJoCo's default: a run reports a divergence
-    itself (:class:`DivergenceError`, from MuJoCo's warning counters). Process-wide while open."""
+    itself (`DivergenceError`, from MuJoCo's warning counters). Process-wide while open."""
     kept: list[str] = []
     old = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(kept.append)

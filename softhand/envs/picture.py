@@ -1,10 +1,10 @@
 """The scene's picture: one offscreen ``mujoco.Renderer`` draw of a state of the two hands.
 
 One place for how a picture is made, used by the env's ``render()`` (``render_mode="rgb_array"``)
-and by :mod:`softhand.viz.render` (``softhand render``'s PNG and contact sheets): a free camera
-around the hands (:class:`CameraView`), MuJoCo's contact points, the geoms recoloured for the
-picture only (the hands by :data:`HAND_COLOURS`, or the caller's colours), and a light
-:data:`BACKGROUND` where no object is drawn (from the segmentation render).
+and by `softhand.viz.render` (``softhand render``'s PNG and contact sheets): a free camera
+around the hands (`CameraView`), MuJoCo's contact points, the geoms recoloured for the
+picture only (the hands by `HAND_COLOURS`, or the caller's colours), and a light
+`BACKGROUND` where no object is drawn (from the segmentation render).
 
 Needs an OpenGL context, chosen when mujoco is first imported: set ``MUJOCO_GL=egl`` (or
 ``osmesa``) before that (``softhand render`` does).

@@ -19,12 +19,12 @@ duration           normal, 3.63 +- 0.45 s (phases scale together)        Cabibih
 shake phase        uniform in [0, 2 pi)                                  -
 ================== ===================================================== =========================
 
-:func:`sample_partners` draws them from one seed (reproducible); :func:`run_partner` runs one
+`sample_partners` draws them from one seed (reproducible); `run_partner` runs one
 handshake for one partner (a module-level function, so it runs in worker processes);
-:func:`run_population` runs many partners' handshakes together on the vector env (one world per
+`run_population` runs many partners' handshakes together on the vector env (one world per
 partner, stepped by mujoco.batch, the controllers for all worlds at once) with the results of
-:func:`run_partner` for each (equal to 1e-9 N; tests/test_population.py);
-:func:`population_summary` gives per region the share of partners over 2 N and the distribution
+`run_partner` for each (equal to 1e-9 N; tests/test_population.py);
+`population_summary` gives per region the share of partners over 2 N and the distribution
 of the peak force, beside the paper's set.
 """
 
@@ -118,7 +118,7 @@ def run_partner(partner: Partner, settings: dict) -> dict:
     per region peak and mean force (N), the regions over 2 N, the force accounting, the grip
     tracking, how many warnings the run raised (its episode's summary of the contacts beyond their
     calibrated range, and any from building the scene) and the wall time (s). The warnings are
-    counted, then passed on as they were (in a worker process, :func:`softhand.parallel.run_tasks`
+    counted, then passed on as they were (in a worker process, `softhand.parallel.run_tasks`
     brings them back to the main process)."""
     import time
 
@@ -151,7 +151,7 @@ def run_partner(partner: Partner, settings: dict) -> dict:
 def run_population(partners: list[Partner], settings: dict, *, nthread: int = 1
                    ) -> tuple[list[dict], dict[int, str]]:
     """The handshakes of ``partners`` on one vector env (softhand.envs.vector), one world each:
-    what :func:`run_partner` returns for each partner, in one batch. ``settings`` as for
+    what `run_partner` returns for each partner, in one batch. ``settings`` as for
     run_partner; ``nthread``: threads of each mujoco.batch Batch (1, the default, in a worker
     process of softhand.parallel, which holds one core; the cores this process may use, alone).
 
@@ -163,7 +163,7 @@ def run_population(partners: list[Partner], settings: dict, *, nthread: int = 1
 
     Returns:
         The results of the partners whose handshake ran to its end, in order, and per partner
-        index that diverged the :class:`~softhand.envs.physics.DivergenceError` text.
+        index that diverged the `DivergenceError` text.
     """
     import time
 

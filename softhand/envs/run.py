@@ -135,7 +135,7 @@ class HandshakeRun:
         from the side, which the pad's slide does not take);
         ``bone_on_bone``: bones pressed through skin and tissue (no law); ``no_law``: any other
         contact between the hands. ``calibrated_share_pct``: the skin-law force inside its
-        calibrated range (the pair's law: :func:`softhand.envs.skins.pair_choices`), in % of all the force
+        calibrated range (the pair's law: `softhand.envs.skins.pair_choices`), in % of all the force
         between the hands (frames of 10 ms; contacts beyond the range count as uncalibrated).
         ``out_of_range_time_pct``: law-carrying contact-frames above their law's range, in % of
         all law-carrying contact-frames. ``unsensed_skin_Ns``: the force through the prosthetic
@@ -143,7 +143,7 @@ class HandshakeRun:
         thenar), i.e. all pair force less the 18 region readings; ``unsensed_share_pct`` its
         share of the pair force. ``by_law_Ns`` / ``by_law_share_pct``: the pair force by the law
         each pair carried (its contact class, ``plate``, a fallback to the plate law, ``tissue``
-        or ``plate pad``; :class:`softhand.envs.skins.PairChoice`); ``contact_laws``: how the
+        or ``plate pad``; `softhand.envs.skins.PairChoice`); ``contact_laws``: how the
         laws were chosen.
         """
         n = len(ACCOUNT_CLASSES)
@@ -207,7 +207,7 @@ class HandshakeRun:
 
         For each region on a relaxation pad whose skin carried more than ``min_held_N`` during
         the grip and shake (the hold), with x(t) the pad's compression (the skin's indentation)
-        and F_QLV(x) the skin's QLV law (:meth:`softhand.laws.fit.SkinLaw.force`) over the whole
+        and F_QLV(x) the skin's QLV law (`softhand.laws.fit.SkinLaw.force`) over the whole
         history x(t), each the largest error over the hold in % of the largest held force
         ``held_N`` of the region's skin (all its contacts):
 
@@ -460,11 +460,11 @@ def _box_contains(data: mujoco.MjData, model: mujoco.MjModel, site: int, point) 
 
 def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float, int]]:
     """(geom, geom) of every contact pair -> (class index in ACCOUNT_CLASSES, calibrated range N,
-    index of its law in :func:`law_labels`).
+    index of its law in `law_labels`).
 
     Pairs ``{Skin}__{tissue}`` carry the skin's design in series with tissue (``skin_law``); a
     ``rigid`` region's pairs: ``tissue_law_only``. Which law each carries:
-    ``env.pair_laws`` (:func:`softhand.envs.skins.pair_choices`).
+    ``env.pair_laws`` (`softhand.envs.skins.pair_choices`).
     """
     m = env.model
     labels = law_labels(env)
@@ -491,10 +491,10 @@ def run_handshake(*, design: str | None = None, skins: Mapping[str, str] | None 
                   controller_settings: Mapping[str, float] | None = None,
                   options: Mapping[str, float] | None = None,
                   **env_kwargs) -> HandshakeRun:
-    """Run one episode with a built-in controller (:func:`run_policy`, which keeps every
+    """Run one episode with a built-in controller (`run_policy`, which keeps every
     ``record_every``-th physics step for the recording; default: the last step of every action,
     100 Hz). ``signal`` and ``controller_settings`` go to
-    :func:`~softhand.envs.controllers.make_controller`.
+    `make_controller`.
 
     ``options`` go to the env's reset (the episode's partner: grip, duration, shake phase).
 
@@ -532,7 +532,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
                options: Mapping[str, float] | None = None, record_every: int | None = None,
                about: Mapping[str, Any] | None = None) -> HandshakeRun:
     """Run one episode of ``env`` with ``policy(obs, info) -> action`` and collect what a user
-    looks at (the :class:`HandshakeRun`: state, forces, readings, contacts and accounting at
+    looks at (the `HandshakeRun`: state, forces, readings, contacts and accounting at
     every ``record_every``-th physics step; default the last of every action, 100 Hz).
 
     ``env`` is a HandshakeEnv or a Gymnasium wrapper of one: the episode steps through the
@@ -541,7 +541,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
     (default: the policy's name).
 
     Raises:
-        ValueError: a bad ``env`` or ``policy`` (:func:`check_policy`), before any work; a bad
+        ValueError: a bad ``env`` or ``policy`` (`check_policy`), before any work; a bad
             seed, option or action as the env's reset and step say.
         DivergenceError: the physics diverged.
     """

@@ -1,5 +1,5 @@
 """The scenario seam: one social touch (a handshake, a caress, a pat, a hand held still) on the
-generic two-hand touch env (:class:`softhand.envs.touch.TwoHandTouchEnv`).
+generic two-hand touch env (`softhand.envs.touch.TwoHandTouchEnv`).
 
 The env owns what every touch shares: the two hands and their skins, the sensors, the physics
 behind its seam, the prosthetic's action, the observation, the force accounting. A scenario owns
@@ -89,7 +89,7 @@ class Scenario(abc.ABC):
 
     @abc.abstractmethod
     def phase(self, t: float) -> str:
-        """The phase at time ``t``, one of :attr:`phases`."""
+        """The phase at time ``t``, one of `phases`."""
 
     @abc.abstractmethod
     def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,

@@ -1,13 +1,13 @@
 """The embedded sensor of every sensing region of the prosthetic hand.
 
 Each of the 18 regions carries one sensor under its skin. Its placement (``bone``, ``interface``
-or ``pocket-floor``; :data:`softhand.fem.sensors.PLACEMENTS`) is chosen per region; the default,
+or ``pocket-floor``; `softhand.fem.sensors.PLACEMENTS`) is chosen per region; the default,
 ``interface`` (under the 0.8 mm outer layer), exists in every design and is where the paper's
 conclusion puts sensors a stiff outer layer protects. A region whose skin has no FE model
 (``rigid``, a reference skin) has an ideal ``surface`` sensor: its transfer is the identity and the
-electronics follow. The reading is the transfer law (:mod:`softhand.sensors.transfer`, shipped
+electronics follow. The reading is the transfer law (`softhand.sensors.transfer`, shipped
 in ``calibration/sensors/transfer.json``) of the region's contact force, then the sensor's
-electronics (:mod:`softhand.sensors.device`).
+electronics (`softhand.sensors.device`).
 """
 
 from __future__ import annotations

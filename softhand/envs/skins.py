@@ -3,12 +3,12 @@
 Every prosthetic skin geom meets every partner tissue geom through an explicit ``<pair>``; its law
 is the series combination of the region's skin and the partner's human tissue (both indent: the
 indentation of the pair is the sum of the two at the same force), shipped as each skin's
-``pair_law`` (:mod:`softhand.skin.pair`, fitted over 0-20 N by ``softhand calibrate``) and scaled
-by the pair's inverse inertia (:mod:`softhand.skin.soft_contact`). A ``rigid`` region leaves only
+``pair_law`` (`softhand.skin.pair`, fitted over 0-20 N by ``softhand calibrate``) and scaled
+by the pair's inverse inertia (`softhand.skin.soft_contact`). A ``rigid`` region leaves only
 the tissue's compliance. Laws come from the shipped calibration files; no FE run, no refit.
 
-The prosthetic hand's skin covers its whole envelope (:mod:`softhand.hands.envelope`): besides the
-18 sensing regions, the non-sensing thenar skin (:data:`softhand.hands.prosthetic.UNSENSED_SKINS`)
+The prosthetic hand's skin covers its whole envelope (`softhand.hands.envelope`): besides the
+18 sensing regions, the non-sensing thenar skin (`softhand.hands.prosthetic.UNSENSED_SKINS`)
 wears the design of the region it belongs to, and has its pairs too. No bare shell meets the
 partner: every pair is a skin (or a ``rigid`` region) against tissue.
 """
@@ -141,7 +141,7 @@ def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_")
 
 
 def skin_of_pair(pair: str, skins: Mapping[str, str]) -> tuple[str, str]:
-    """(skin geom key, design) of a pair name made by :func:`add_skin_pairs`: a region's own
+    """(skin geom key, design) of a pair name made by `add_skin_pairs`: a region's own
     design, or for a non-sensing skin the design of the region it belongs to."""
     key = pair.partition("__")[0]
     if key in UNSENSED_SKINS:
@@ -157,7 +157,7 @@ def _calibration(skin: str, directory: str):
 @functools.lru_cache(maxsize=32)
 def series_law(skin: str, directory: str = str(SKINS_DIR)) -> SoftContactParams:
     """The pair law of ``skin`` against human tissue: the shipped ``pair_law`` of its calibration
-    (:mod:`softhand.skin.pair`: the two laws in series, fitted over the whole 0-20 N range);
+    (`softhand.skin.pair`: the two laws in series, fitted over the whole 0-20 N range);
     ``rigid``: the tissue's own soft contact (only the tissue indents).
 
     Raises:
@@ -176,7 +176,7 @@ def series_law(skin: str, directory: str = str(SKINS_DIR)) -> SoftContactParams:
 def calibrated_max_force(skin: str, directory: str = str(SKINS_DIR)) -> float:
     """Largest normal force (N) up to which ``skin``'s pair law against human tissue is calibrated:
     the smaller of the two laws' data ranges (a design's FE curves, 20 N; the tissue's published
-    data, :data:`DATA_MAX_N`, 7 N). ``rigid``: the tissue's range."""
+    data, `DATA_MAX_N`, 7 N). ``rigid``: the tissue's range."""
     if skin == "rigid":
         return float(DATA_MAX_N[HUMAN])
     series_law(skin, directory)  # checks the file has a pair law
@@ -194,10 +194,10 @@ def check_pad_timestep(skins: Mapping[str, str], representations: Mapping[str, s
                        timestep_s: float, directory: str | Path = SKINS_DIR,
                        hand_pad: HandPad | None = None) -> None:
     """Refuse a timestep at which a region's relaxation pad is unstable: inside its skin's
-    calibrated range (:meth:`HandPad.max_timestep_s`: the pad's spring is integrated explicitly;
+    calibrated range (`HandPad.max_timestep_s`: the pad's spring is integrated explicitly;
     the shipped designs hold their calibrated range up to 2.48 ms (solid-pu, 7 N) to 3.46 ms
     (prosthetic-102l, 1 N)), or under a hard grip beyond it: above
-    :data:`PAD_TESTED_MAX_TIMESTEP_S` unless the pad is stable at every force (a linear law:
+    `PAD_TESTED_MAX_TIMESTEP_S` unless the pad is stable at every force (a linear law:
     prosthetic-102l, to 3.46 ms).
 
     Raises:
@@ -239,12 +239,12 @@ def check_pad_timestep(skins: Mapping[str, str], representations: Mapping[str, s
 
 
 #: which laws the skin pairs take: ``geometry`` (default): the law of the pair's contact class
-#: (:mod:`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate protocol
+#: (`softhand.skin.contact_classes`); ``plate``: every pair the paper's plate protocol
 CONTACT_LAWS = ("geometry", "plate")
 
 
 def check_contact_laws(value: str) -> str:
-    """``value`` if it is one of :data:`CONTACT_LAWS` (ValueError naming it otherwise)."""
+    """``value`` if it is one of `CONTACT_LAWS` (ValueError naming it otherwise)."""
     if value not in CONTACT_LAWS:
         raise ValueError(f"contact_laws = {show(value)}: allowed {', '.join(CONTACT_LAWS)}")
     return value
@@ -274,7 +274,7 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
                  representations: Mapping[str, str] | None = None, *,
                  directory: str | Path = SKINS_DIR,
                  contact_laws: str = "geometry") -> dict[str, PairChoice]:
-    """The law of every skin pair of ``model`` (pairs named by :func:`add_skin_pairs`): the one
+    """The law of every skin pair of ``model`` (pairs named by `add_skin_pairs`): the one
     place that decides which law a pair takes (the scene's spec, its force ranges and its
     accounting all read it)."""
     check_contact_laws(contact_laws)
@@ -310,16 +310,16 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                     directory: str | Path = SKINS_DIR, pro: str = "pro_",
                     hand_pad: HandPad | None = None,
                     contact_laws: str = "geometry") -> list[str]:
-    """Put each region's skin on the hand and add the skin pairs (:func:`add_skin_pairs`) with
+    """Put each region's skin on the hand and add the skin pairs (`add_skin_pairs`) with
     their laws in ``solref``/``solimp`` (a non-sensing skin: its region's design and
     representation; default representation ``soft-contact``).
 
-    Each pair's law is chosen by :func:`pair_choices` (``contact_laws``: by the pair's contact
+    Each pair's law is chosen by `pair_choices` (``contact_laws``: by the pair's contact
     geometry, or the plate law everywhere). Each representation goes through its class
-    (:mod:`softhand.skin.representations`):
+    (`softhand.skin.representations`):
     ``soft-contact`` leaves the geom as it is and gives its pairs the skin-and-tissue pair law;
     ``soft-contact+relaxation`` moves the geom onto a relaxation pad along its outward normal
-    (:data:`OUTWARD`) and gives its pairs the tissue's law alone; ``rigid``: the tissue's law.
+    (`OUTWARD`) and gives its pairs the tissue's law alone; ``rigid``: the tissue's law.
     Everything is written into the spec before the caller compiles it, so the MJCF of the spec
     (``spec.to_xml()``, ``models/mjcf/handshake_scene.xml``) is the simulated model. The pair's
     inverse inertia that scales each law is read from one compile of the spec with the pairs.

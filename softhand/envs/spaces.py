@@ -2,14 +2,14 @@
 
 One source for three readers: the env's ``action_names`` and ``observation_names`` (and the
 vector env's ``single_`` ones), the layout tables of ``HandshakeEnv``'s docstring (a test checks
-that they are :func:`action_table` and :func:`observation_table`), and the tables of
+that they are `action_table` and `observation_table`), and the tables of
 ``docs/controllers.md`` (generated from these at build time).
 
 A name is ``quantity/element [unit]``: ``qpos/pro_index_mcp [rad]``, ``sensor_patch/Index1 [N]``,
 ``speed/pro_thumb_rot_motor [fraction of max]``; the last observation is ``episode_fraction [-]``.
 
-The observation's region values are chosen by ``observe`` (:data:`OBSERVE`), each a block of the
-18 regions in ``region_names`` order (:data:`REGION_BLOCKS`):
+The observation's region values are chosen by ``observe`` (`OBSERVE`), each a block of the
+18 regions in ``region_names`` order (`REGION_BLOCKS`):
 
 * ``sensor_patch``: what each region's embedded sensor reads on its 4 x 4 mm patch under the
   skin, a fraction of the region's load (``info["sensor_readings_N"]``);
@@ -63,9 +63,9 @@ def observation_names(joints: Sequence[tuple[str, str]], regions: Sequence[str],
 
     Args:
         joints: the prosthetic hand's joints in observation order, each (name, kind) with kind
-            ``hinge`` or ``slide`` (:data:`JOINT_UNITS`).
+            ``hinge`` or ``slide`` (`JOINT_UNITS`).
         regions: the sensing regions in observation order (the env's ``region_names``).
-        observe: a key of :data:`OBSERVE`.
+        observe: a key of `OBSERVE`.
     """
     units = [JOINT_UNITS[kind] for _, kind in joints]
     return (*(f"qpos/{j} [{u[0]}]" for (j, _), u in zip(joints, units, strict=True)),

@@ -1,8 +1,8 @@
 """The two-hand touch env: a sensored hand with calibrated skins and a scripted human partner, one
-social touch at a time (a :class:`~softhand.envs.scenario.Scenario`).
+social touch at a time (a `Scenario`).
 
-:class:`TwoHandTouchEnv` owns what every touch shares: both hands and their skins, the embedded
-sensors, the physics behind :class:`~softhand.envs.physics.MujocoPhysics`, the prosthetic's
+`TwoHandTouchEnv` owns what every touch shares: both hands and their skins, the embedded
+sensors, the physics behind `MujocoPhysics`, the prosthetic's
 action, the observation, the contacts' calibrated ranges and the per-region forces. The touch
 itself (the partner's plan, its phases, the reward) is the scenario's.
 ``softhand.envs.handshake.HandshakeEnv`` is this env with the handshake scenario; its docstring
@@ -79,7 +79,7 @@ class TwoHandTouchEnv(gym.Env):
     """A sensored hand touched by a scripted human partner, in the way ``scenario`` scripts.
 
     Args: see ``softhand.envs.handshake.HandshakeEnv`` (all but the scenario's own); ``scenario``
-    is the touch (a :class:`~softhand.envs.scenario.Scenario`).
+    is the touch (a `Scenario`).
     """
 
     metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES), "render_fps": 100}
@@ -223,7 +223,7 @@ class TwoHandTouchEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode; ``seed`` is None or an integer >= 0; ``options`` go to the scenario
         (checked: softhand.envs.partner.check_reset_options). An episode cut short by this reset
-        issues its range summary first (:meth:`_warn_range`).
+        issues its range summary first (`_warn_range`).
 
         Raises:
             RuntimeError: the env is closed.
@@ -324,8 +324,8 @@ class TwoHandTouchEnv(gym.Env):
         return obs, reward, unstable, truncated, info
 
     def close(self) -> None:
-        """Release the env: :meth:`step` and :meth:`reset` refuse afterwards (closing twice is
-        harmless). An episode cut short here issues its range summary (:meth:`_warn_range`)."""
+        """Release the env: `step` and `reset` refuse afterwards (closing twice is
+        harmless). An episode cut short here issues its range summary (`_warn_range`)."""
         if getattr(self, "_closed", True):  # closed, or __init__ stopped before the scene
             return
         if getattr(self, "_planned", False) and self._ended is None:
@@ -338,8 +338,8 @@ class TwoHandTouchEnv(gym.Env):
     def render(self) -> np.ndarray:
         """The current state as an (H, W, 3) uint8 picture (``render_mode="rgb_array"``),
         ``render_size`` (W, H) pixels from ``render_view``: ``softhand render``'s picture, made
-        by the same code (:class:`~softhand.envs.picture.ScenePicture`), without its caption.
-        The renderer is made at the first call and freed by :meth:`close`; it draws a copy of
+        by the same code (`ScenePicture`), without its caption.
+        The renderer is made at the first call and freed by `close`; it draws a copy of
         the state, so rendering never changes the episode.
 
         Raises:
@@ -390,7 +390,7 @@ class TwoHandTouchEnv(gym.Env):
                      t: float) -> None:
         """Count the contacts above their pair law's calibrated range at this step, at time ``t``
         (s; ``geoms``, ``force``, ``top``: MujocoPhysics.contacts_above), for ``info`` and into
-        the episode's counts; the episode warns once, at its end (:meth:`_warn_range`). The
+        the episode's counts; the episode warns once, at its end (`_warn_range`). The
         vector env (softhand.envs.vector) keeps each world's counts with this too."""
         self._beyond = int(force.size)
         self._beyond_N = {}
@@ -424,7 +424,7 @@ class TwoHandTouchEnv(gym.Env):
         return out
 
     def _warn_range(self, summary: dict[str, Any], how: str) -> None:
-        """One :class:`CalibratedRangeWarning` for an episode that had contacts beyond range,
+        """One `CalibratedRangeWarning` for an episode that had contacts beyond range,
         attributed to the user's code that called step(), reset() or close() (through
         Gymnasium's wrappers too): issued on the step that ends the episode (``how`` "ended"), or
         when reset() or close() cuts it short."""

@@ -1,21 +1,21 @@
 """``softhand/Handshake-v0`` as a Gymnasium vector env: W handshakes stepped together.
 
 ``gymnasium.make_vec("softhand/Handshake-v0", num_envs=W, vectorization_mode="vector_entry_point")``
-returns a :class:`HandshakeVectorEnv`. Its worlds may differ: ``worlds`` gives per-world
-keywords of :class:`~softhand.envs.handshake.HandshakeEnv` over the shared ones (other partners,
+returns a `HandshakeVectorEnv`. Its worlds may differ: ``worlds`` gives per-world
+keywords of `HandshakeEnv` over the shared ones (other partners,
 skins, hands, reward weights), and each reset takes a seed and options per world.
 
 How it is built (one place for each concept):
 
-* each world's setup is a :class:`HandshakeEnv` (its arguments checked, its scene compiled, its
+* each world's setup is a `HandshakeEnv` (its arguments checked, its scene compiled, its
   laws, sensors, grasp, preset and range bookkeeping), whose own physics is never stepped;
-* the physics of all worlds is one :class:`~softhand.envs.batch.BatchPhysics` (``mujoco.batch``,
+* the physics of all worlds is one `BatchPhysics` (``mujoco.batch``,
   threads with the GIL released, bit-identical to each world stepped alone);
 * the partner's script and grip regulator, the relaxed sensored hand, the phases and the reward
-  are :class:`~softhand.envs.scenarios.handshake.HandshakeWorlds`, over arrays of worlds, which
+  are `HandshakeWorlds`, over arrays of worlds, which
   the single env runs with one world;
 * the embedded sensors' electronics are each world's own
-  :class:`~softhand.sensors.device.SensorChain`, stepped world by world (its noise stream is the
+  `SensorChain`, stepped world by world (its noise stream is the
   world's; softhand.sensors keeps one world per chain);
 * the range check reads each world's contacts from its batch data and counts them with the
   world's env (``_check_range``), so the episode's summary and its ``CalibratedRangeWarning``

@@ -1,6 +1,6 @@
 """The GPU physics backend: W handshake scenes stepped together by MuJoCo Warp.
 
-:class:`WarpPhysics` implements the seam of :class:`~softhand.envs.batch.BatchPhysics` (the same
+`WarpPhysics` implements the seam of `BatchPhysics` (the same
 methods, arrays with a leading world axis) on ``mujoco_warp`` (MJWarp), MuJoCo's GPU port written
 in NVIDIA Warp: one ``mjw.Model`` for all worlds and one ``mjw.Data`` of ``nworld`` worlds, stepped
 by ``mjw.step`` on a CUDA device, or on Warp's CPU device where there is none (slow, and its
@@ -59,7 +59,7 @@ class WarpPhysics:
     Args:
         models: one compiled scene per world; all the same model object.
         frame_skip, region_sensors, feel_sensors, mocap_body, bone_sensors: as
-            :class:`~softhand.envs.batch.BatchPhysics`.
+            `BatchPhysics`.
         device: the Warp device ("cuda:0", "cpu"; default: Warp's default, a GPU where there is
             one).
 

@@ -3,9 +3,9 @@
 - handshake: the paper's handshake (Cabibihan et al.): reach, grip, shake, release, return.
 
 A new touch (a caress, a pat, a hand held still) is a new module here with a
-:class:`~softhand.envs.scenario.Scenario` subclass: its phases, the partner's plan (mount path and
+`Scenario` subclass: its phases, the partner's plan (mount path and
 digit targets), the relaxed human hand's targets, the reward; an env passes it to
-:class:`~softhand.envs.touch.TwoHandTouchEnv`, as softhand.envs.handshake does.
+`TwoHandTouchEnv`, as softhand.envs.handshake does.
 """
 
 from softhand.envs.scenarios.handshake import DEFAULT_REWARD_WEIGHTS, HandshakeScenario

@@ -187,7 +187,7 @@ class HandshakeWorlds:
     """The per-step part of the handshake for W worlds at once, over arrays with a leading world
     axis: the partner's script and grip regulator, the relaxed sensored hand, the phases and the
     reward. The vector env (softhand.envs.vector) steps its worlds with it; a single
-    :class:`HandshakeScenario` is one world of it (W = 1), so the logic exists once.
+    `HandshakeScenario` is one world of it (W = 1), so the logic exists once.
 
     Args:
         scenarios: planned scenarios (after their reset), one per world.
