@@ -1,8 +1,8 @@
 """Record any policy's handshake to rerun: one episode of an env, written as a ``.rrd``.
 
-:func:`record` runs the episode with :func:`softhand.envs.run.run_policy` (what the built-in
+`record` runs the episode with `softhand.envs.run.run_policy` (what the built-in
 controllers' runs collect: the state, region forces, sensor readings and contacts at every env
-step) and writes it with :func:`softhand.viz.recording.record_handshake` (its entity paths)::
+step) and writes it with `softhand.viz.recording.record_handshake` (its entity paths)::
 
     import gymnasium as gym
     import softhand.envs  # noqa: F401  (registers softhand/Handshake-v0)
@@ -33,7 +33,7 @@ def record(env: Any, policy: Callable[[Any, dict], Any], path: str | os.PathLike
     recording to ``path`` (atomically); return the run (its ``table()``, ``summary()``, ...).
 
     Args:
-        env: a :class:`~softhand.envs.HandshakeEnv`, or a Gymnasium wrapper of one
+        env: a `HandshakeEnv`, or a Gymnasium wrapper of one
             (``gymnasium.make("softhand/Handshake-v0", ...)``): the episode steps through the
             wrappers, so the policy gets their observation.
         policy: called every env step with the observation and ``info``; returns the action.

@@ -1,6 +1,6 @@
 """The paper's Fig. 4, over a population of partners: each region's peak force across partners.
 
-:func:`population_figure` takes plain data (per partner, per region peak force; the paper's set of
+`population_figure` takes plain data (per partner, per region peak force; the paper's set of
 regions over 2 N) and writes a PNG: top, each region's peak-force distribution over the partners
 (box and points) with the 2 N line; bottom, the share of partners over 2 N per region, the regions
 of the paper's Fig. 4 marked. This stage does not import the environment.

@@ -32,7 +32,7 @@ along the kinematic tree).
 The default blueprint opens where the hands touch: the time panel selects the contact phase
 (the frames whose total force is at least 5 % of its peak) and plays it in a loop, the 3D view
 looks at the two palms at the peak from ``softhand render``'s default angle
-(:class:`softhand.viz.render.CameraView`), and the force plot lists only the regions that carry
+(`softhand.viz.render.CameraView`), and the force plot lists only the regions that carry
 load (over ``LOADED_N``); the regions that never do are named in ``skin/designs``.
 """
 
@@ -127,7 +127,7 @@ class HandshakeFrames:
 
     @classmethod
     def from_run(cls, run: Any) -> HandshakeFrames:
-        """What a recording of a run holds: a :class:`softhand.envs.run.HandshakeRun` (or
+        """What a recording of a run holds: a `softhand.envs.run.HandshakeRun` (or
         anything with its fields), frame by frame."""
         return cls(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat, run.region_force_N,
                    run.region_names, run.skins, run.contacts, run.phase, run.sensor_reading_N,

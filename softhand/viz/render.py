@@ -1,10 +1,10 @@
 """Offscreen pictures of the handshake scene, written as PNG.
 
-:func:`render_state` draws one state of the scene (both hands and MuJoCo's contact points) from a
-free camera around the hands; :func:`render_sheet` draws several moments from the back of each
+`render_state` draws one state of the scene (both hands and MuJoCo's contact points) from a
+free camera around the hands; `render_sheet` draws several moments from the back of each
 hand and from below, the prosthetic's regions coloured by their force. The caller hands the states
 over as plain arrays (``qpos`` and the mocap poses), as for the rerun recording. The picture itself
-is made by :class:`softhand.envs.picture.ScenePicture`, the one place for it, which the env's
+is made by `softhand.envs.picture.ScenePicture`, the one place for it, which the env's
 ``render()`` uses too.
 
 Needs an OpenGL context, chosen when mujoco is first imported: set ``MUJOCO_GL=egl`` (or
