@@ -1,6 +1,6 @@
 """A flex region on the hand against the flex rig and the FE (``softhand bench flex``).
 
-For each design and posture (:mod:`softhand.hands.flex_region`, region Index3): the shipped flex
+For each design and posture (`softhand.hands.flex_region`, region Index3): the shipped flex
 pad on the prosthetic index fingertip pressed at 0.5 mm/s to 2 N. Reported:
 
 * the loading curve against the same pad on the rig's world-fixed base (RMS, % of 2 N): whether
@@ -8,8 +8,8 @@ pad on the prosthetic index fingertip pressed at 0.5 mm/s to 2 N. Reported:
 * against the design's FE loading curve (RMS up to 2 N, % of 2 N): the flex calibration's own
   error, which the hand inherits;
 * the contact area at 0.5, 1 and 2 N (the pad's lower and upper bounds,
-  :class:`softhand.skin.flex.ContactPatch`) against the FE's (contact Gauss points,
-  :attr:`softhand.fem.solver.IndentationResult.contact_area_mm2`), and the peak pressure at the
+  `softhand.skin.flex.ContactPatch`) against the FE's (contact Gauss points,
+  `softhand.fem.solver.IndentationResult.contact_area_mm2`), and the peak pressure at the
   largest common force;
 * the cost: ``mj_step`` wall time per step of the hand scene and of the rig, and their dofs.
 

@@ -9,7 +9,7 @@ Measures, in one process on this machine (``softhand bench handshake``):
 * error of each timestep: per controller and seed, the region forces at 2 ms and 1 ms against
   0.5 ms (largest difference of a region's mean and peak force, relative change of the summed
   mean forces, whether the regions over 2 N are the same);
-* representations on the hand (:func:`_representations`): cost per step and error against
+* representations on the hand (`_representations`): cost per step and error against
   the relaxation reference for a silicone and a polyurethane design;
 * sensitivity: the same handshake (same partner, seed and controller) with the prosthetic hand
   wearing rigid skins (stock contact, only the tissue indents), the commercial skin

@@ -12,7 +12,7 @@ controller, 2 ms physics step, an env step every 10 ms) over whole episodes:
 * **Python per stage**: an instrumented episode (each stage of ``HandshakeEnv.step`` timed by a
   wrapper, about a microsecond each): the time per env step of the physics and of every piece of
   Python around it, and the Python share, 1 - physics / env step;
-* **vector env**: :class:`~softhand.envs.vector.HandshakeVectorEnv` with N worlds of the same
+* **vector env**: `HandshakeVectorEnv` with N worlds of the same
   scene (seeds 0..N-1), stepped with the controller's array entry for as many env steps as one
   episode, on the threads this process may use: env steps per second summed over the worlds and
   the aggregate real-time factor (simulated seconds of all worlds per wall second).
@@ -105,7 +105,7 @@ def _episode(env: HandshakeEnv, seed: int, step: Callable | None = None) -> tupl
 
 
 def step_stages(env: HandshakeEnv, seed: int = 0) -> dict[str, Any]:
-    """One instrumented episode of ``env``: per :data:`STAGES` label its time per env step (us),
+    """One instrumented episode of ``env``: per `STAGES` label its time per env step (us),
     the env step's time (us, wrappers included) and the Python share (1 - physics / env step)."""
     totals: dict[str, float] = defaultdict(float)
     physics, scenario = env.physics, env.scenario
@@ -188,7 +188,7 @@ def run_scale_benchmark(out_dir: str | Path = REPORTS_DIR, *,
 
 
 def markdown(d: dict[str, Any]) -> str:
-    """The report of :func:`run_scale_benchmark`'s data."""
+    """The report of `run_scale_benchmark`'s data."""
     single, ceiling, stages = d["single"], d["ceiling"], d["stages"]
     dt_s = single["realtime_factor"] / single["env_steps_per_s"]
     lines = [

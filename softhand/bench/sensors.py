@@ -70,7 +70,7 @@ def record_row(rec: SensorRecord) -> dict[str, Any]:
 
 
 def sensor_row(design: str, settings: IndentationSettings | None = None) -> dict[str, Any]:
-    """:func:`record_row` of one FE run of ``design`` (default: to 2 N, 10 s hold)."""
+    """`record_row` of one FE run of ``design`` (default: to 2 N, 10 s hold)."""
     r = solver.indent(design, settings or IndentationSettings(hold_s=10.0))
     return {**record_row(record_from_result(r)), "wall_s": r.wall_s}
 
