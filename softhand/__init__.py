@@ -2,7 +2,7 @@
 
 Stages (each imports only the ones before it):
 
-1. :mod:`softhand.fem` - FE indentation of the paper's synthetic phalanges.
+1. `softhand.fem` - FE indentation of the paper's synthetic phalanges.
 """
 
 __version__ = "0.1.0"

@@ -28,10 +28,10 @@ Every argument and input file is checked before any work starts. Exit status:
 130 interrupted by Ctrl-C or SIGTERM: what had finished is written (atomically), nothing partial
 == ===================================================================================
 
-Default folders come from :mod:`softhand.paths` (the same for every command). Only ``fe sweep``,
+Default folders come from `softhand.paths` (the same for every command). Only ``fe sweep``,
 ``fe indent --out``, ``calibrate`` and ``sensors calibrate`` write into the shipped
 ``calibration/``, and only with ``--force``: the new set goes into a copy beside it that replaces
-it only when the run completes (:func:`softhand.io.staged_folder`).
+it only when the run completes (`softhand.io.staged_folder`).
 """
 
 from __future__ import annotations
@@ -1259,7 +1259,7 @@ def bench_calibration(out_dir, skins) -> None:
 
 
 def run() -> None:
-    """The ``softhand`` console script: :data:`main`, and an exit 130 that stays 130.
+    """The ``softhand`` console script: `main`, and an exit 130 that stays 130.
 
     CPython exits by SIGINT (status -2) after a handled Ctrl-C when the interrupt first surfaced
     inside code that C evaluated with ``PyRun_*`` (a Cython module being imported, for one), even

@@ -1,7 +1,7 @@
 """The command line's inputs: typed options and their checks, before any work starts.
 
-Every check raises :class:`InputError` (one line ``error: ...`` naming the flag or file, the
-value and the allowed range; exit status 2). :mod:`softhand.cli` builds the commands from these.
+Every check raises `InputError` (one line ``error: ...`` naming the flag or file, the
+value and the allowed range; exit status 2). `softhand.cli` builds the commands from these.
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def checked_dir(path: str | None, flag: str, *, force: bool | None = None,
 def checked_file(path: str | None, flag: str, suffix: str, *,
                  need_bytes: float = 0.0) -> Path | None:
     """``path`` as a file this command may write (never into the shipped data), before any
-    work; ``need_bytes`` as in :func:`checked_dir`."""
+    work; ``need_bytes`` as in `checked_dir`."""
     from softhand.io import check_free_space, check_writable_file
 
     if path is None:

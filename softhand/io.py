@@ -4,7 +4,7 @@ its target and swapped in only when complete, JSON input files read with one cle
 block that Ctrl-C cannot cut in half.
 
 An interrupted run leaves either the old file or the new one, never a partial file; a staged
-folder (:func:`staged_folder`) leaves either the old set or the new complete set.
+folder (`staged_folder`) leaves either the old set or the new complete set.
 """
 
 from __future__ import annotations
@@ -115,7 +115,7 @@ def check_writable_file(path: str | os.PathLike, *, suffix: str | None = None,
                         name: str = "path") -> Path:
     """``path`` as a file that can be written: right suffix, not a folder, writable folder.
 
-    A missing folder is allowed when it can be created (see :func:`check_writable_dir`).
+    A missing folder is allowed when it can be created (see `check_writable_dir`).
 
     Raises:
         ValueError: naming ``name``, the path and the expected suffix.
@@ -188,7 +188,7 @@ def read_json(path: str | os.PathLike, *, name: str | None = None) -> Any:
 
 
 class Staged:
-    """A folder to write a set into (see :func:`staged_folder`)."""
+    """A folder to write a set into (see `staged_folder`)."""
 
     def __init__(self, target: Path, path: Path) -> None:
         self.target, self.path, self.committed = target, path, False
@@ -212,7 +212,7 @@ class Staged:
 
 @contextlib.contextmanager
 def staged_folder(target: str | os.PathLike, *, stage: bool) -> Iterator[Staged]:
-    """A folder to write a whole set into, swapped in for ``target`` only on :meth:`Staged.commit`.
+    """A folder to write a whole set into, swapped in for ``target`` only on `Staged.commit`.
 
     With ``stage`` (shipped data), the set is written into a copy of ``target`` made beside it;
     ``commit()`` swaps the copy in; leaving the block without a commit (Ctrl-C, a failed design,

@@ -2,21 +2,21 @@
 
 softhand uses the cores at one level at a time, never two levels at once:
 
-* one FE run: ``threads`` threads evaluate element blocks (:mod:`softhand.fem.assembly`); BLAS is
-  held at one thread for the whole run (:func:`single_threaded_blas`), because OpenBLAS threads
+* one FE run: ``threads`` threads evaluate element blocks (`softhand.fem.assembly`); BLAS is
+  held at one thread for the whole run (`single_threaded_blas`), because OpenBLAS threads
   busy-wait between calls and, on top of the element threads, take cores that other work needs;
 * a batch (FE sweep, calibration, population): ``threads`` worker processes, one task each at a
   time, each single-threaded (element threads and BLAS).
 
-The default (:func:`default_threads`) is the number of CPUs this process may run on (its affinity
-mask, which respects ``taskset`` and container limits), at most :data:`MAX_THREADS`.
+The default (`default_threads`) is the number of CPUs this process may run on (its affinity
+mask, which respects ``taskset`` and container limits), at most `MAX_THREADS`.
 
-:func:`run_tasks` runs a batch, on joblib's loky worker processes by default (nothing to set
+`run_tasks` runs a batch, on joblib's loky worker processes by default (nothing to set
 up), or on a Dask distributed cluster when given its scheduler's address (``cluster``, the
 command line's ``--cluster tcp://HOST:PORT``; ``pip install 'softhand[cluster]'``). Either way:
 
-* the outcome is a :class:`BatchOutcome`: results in the order of the input, a task that raised
-  is a :class:`TaskError` (its class name and message) and does not stop the others;
+* the outcome is a `BatchOutcome`: results in the order of the input, a task that raised
+  is a `TaskError` (its class name and message) and does not stop the others;
 * tasks start in the order given; ``on_done`` runs in this process after each task, as it ends;
 * the warnings a task raised come back with its result and are raised again here, each distinct
   one once per batch;
@@ -28,11 +28,11 @@ command line's ``--cluster tcp://HOST:PORT``; ``pip install 'softhand[cluster]'`
 Local workers are started for one batch and stopped after it (joblib keeps them for the next
 batch by default): a batch sees the caller's ``sys.path`` and modules as they are, and no idle
 worker outlives it. A local worker process that dies (killed, out of memory) stops the batch:
-the tasks not finished by then fail with a :class:`TaskError` saying so (the spawn pool this
+the tasks not finished by then fail with a `TaskError` saying so (the spawn pool this
 replaces waited for ever).
 
-The cluster's address is checked before any task (:func:`check_cluster`): its form, then a
-scheduler answering within :data:`CLUSTER_TIMEOUT_S`; each refusal is one ``ValueError`` naming
+The cluster's address is checked before any task (`check_cluster`): its form, then a
+scheduler answering within `CLUSTER_TIMEOUT_S`; each refusal is one ``ValueError`` naming
 the value and what is allowed. ``threads`` and ``cluster`` exclude each other: the cluster's
 workers set how many tasks run at once. Each task is one Dask future, so that progress is per
 task; a worker that dies has its task rerun elsewhere by Dask (``KilledWorker`` after a few).
@@ -74,12 +74,12 @@ def available_cpus() -> int:
 
 
 def default_threads() -> int:
-    """The default ``--threads``: available CPUs, at most :data:`MAX_THREADS`."""
+    """The default ``--threads``: available CPUs, at most `MAX_THREADS`."""
     return min(MAX_THREADS, available_cpus())
 
 
 def check_threads(threads: int | None, *, name: str = "threads") -> int:
-    """``threads`` as an int >= 1 (None: :func:`default_threads`).
+    """``threads`` as an int >= 1 (None: `default_threads`).
 
     Raises:
         ValueError: not an integer >= 1.
@@ -117,7 +117,7 @@ def _connect(address: object, name: str):
 
     Raises:
         ValueError: a malformed address, distributed not installed, tls:// without TLS
-            settings, or no scheduler answering within :data:`CLUSTER_TIMEOUT_S` (plus a second).
+            settings, or no scheduler answering within `CLUSTER_TIMEOUT_S` (plus a second).
     """
     address = _cluster_address(address, name)
     try:
@@ -167,12 +167,12 @@ def _connect(address: object, name: str):
 
 
 def check_cluster(address: str, *, name: str = "cluster") -> str:
-    """``address`` if a Dask scheduler answers there (the check :func:`run_tasks` makes before
+    """``address`` if a Dask scheduler answers there (the check `run_tasks` makes before
     any work, for callers that check their inputs before theirs).
 
     Raises:
         ValueError: naming ``name`` and the value: a malformed address, Dask distributed not
-            installed, or no scheduler answering within :data:`CLUSTER_TIMEOUT_S`.
+            installed, or no scheduler answering within `CLUSTER_TIMEOUT_S`.
     """
     client = _connect(address, name)
     client.close()
@@ -203,7 +203,7 @@ class BatchOutcome:
 
     Attributes:
         results: finished tasks, in the order of the input.
-        errors: failed tasks and why (:class:`TaskError` from workers, the exception in-process).
+        errors: failed tasks and why (`TaskError` from workers, the exception in-process).
         missing: tasks that neither finished nor failed (interrupted), in input order.
         interrupted: True when Ctrl-C stopped the batch.
     """
@@ -219,7 +219,7 @@ class BatchOutcome:
 
 
 #: What a worker sends back for one task: key, succeeded, result or (class name, message),
-#: the warnings it raised (:func:`_portable`)
+#: the warnings it raised (`_portable`)
 _Done = tuple[Hashable, bool, Any, list[tuple]]
 
 
@@ -274,7 +274,7 @@ def _one_line(exc: BaseException) -> tuple[str, str]:
 
 
 def _loky_backend():
-    """joblib's loky backend: workers that ignore Ctrl-C (:func:`_init_worker`) and are
+    """joblib's loky backend: workers that ignore Ctrl-C (`_init_worker`) and are
     stopped when the batch ends."""
     from joblib.parallel import LokyBackend
 
@@ -360,12 +360,12 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple[Hashable, tuple]], *
         fn: a module-level function (it is sent to worker processes by reference: they import
             its module).
         tasks: (key, args) pairs; keys are unique. They start in this order.
-        threads: local worker processes (None: :func:`default_threads`), joblib's loky backend;
+        threads: local worker processes (None: `default_threads`), joblib's loky backend;
             1 runs in this process (BLAS single-threaded, Ctrl-C interrupts the running task).
             Not with ``cluster``, whose workers set how many tasks run at once.
         cluster: the address of a Dask distributed scheduler, ``tcp://HOST:PORT`` or
             ``tls://HOST:PORT``: the tasks run on its workers (None: on this machine). It is
-            checked before any task starts (:func:`check_cluster`).
+            checked before any task starts (`check_cluster`).
         on_done: called in the main process with (key, succeeded) after each task.
 
     Warnings raised by a task in a worker are sent back with its result and raised again in
@@ -378,7 +378,7 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple[Hashable, tuple]], *
 
     Raises:
         ValueError: ``threads`` not an integer >= 1; ``cluster`` malformed, not reachable within
-            :data:`CLUSTER_TIMEOUT_S`, or given with ``threads``.
+            `CLUSTER_TIMEOUT_S`, or given with ``threads``.
     """
     client = None
     if cluster is not None:

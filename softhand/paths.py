@@ -16,7 +16,7 @@ name               folder                                      written by / read
 The shipped data is the package ``softhand.calibration`` (``calibration/`` of the repository, read
 through importlib.resources), so a regular (non-editable) install finds it as a checkout does.
 Reports go to ``reports/`` of the checkout, or of the working directory for an installed wheel.
-Folders under ``CALIBRATION_DIR`` hold shipped data: :func:`is_shipped` tells whether a path lies there, so that a
+Folders under ``CALIBRATION_DIR`` hold shipped data: `is_shipped` tells whether a path lies there, so that a
 command can refuse to overwrite shipped data with an incomplete set unless told to (``--force``).
 """
 

@@ -99,7 +99,7 @@ def check_numbers(key: str, value: Any, *, length: int | None = None, min_length
         value: a list or tuple (a 1-D numpy array is accepted too; a string is not).
         length: exact number of entries (None: any number >= ``min_length``).
         min_length: fewest entries when ``length`` is None.
-        lo, hi, lo_open, hi_open: range of every entry, as in :func:`check_number`.
+        lo, hi, lo_open, hi_open: range of every entry, as in `check_number`.
         why: reason appended to a wrong-length message, e.g. ``"(as many as sil.alpha)"``.
 
     Raises:

@@ -4,7 +4,7 @@ A warning raised deep inside softhand (a skin pair built outside its calibrated 
 whose contacts went beyond their laws' range) is about something the user did: it should name the
 line of the user's code that built the env or called ``env.step()``, even through Gymnasium's
 wrappers (``gymnasium.make`` adds ``OrderEnforcing`` and ``PassiveEnvChecker``). A fixed
-``stacklevel`` cannot do that: the depth changes with every wrapper. :func:`warn_at_caller` walks out
+``stacklevel`` cannot do that: the depth changes with every wrapper. `warn_at_caller` walks out
 of the frames of softhand and Gymnasium and attributes the warning to the first frame outside
 them (Python 3.12's ``skip_file_prefixes`` does the same; softhand supports 3.10).
 
@@ -53,6 +53,6 @@ def caller_stacklevel(prefixes: tuple[str, ...] = INTERNAL_PREFIXES) -> int:
 
 def warn_at_caller(message: str, category: type[Warning]) -> None:
     """``warnings.warn(message, category)`` attributed to the user's code: the first frame on the
-    stack outside softhand and Gymnasium (:data:`INTERNAL_PREFIXES`)."""
+    stack outside softhand and Gymnasium (`INTERNAL_PREFIXES`)."""
     # caller_stacklevel counts from this function; warnings.warn counts from here too
     warnings.warn(message, category, stacklevel=caller_stacklevel())
