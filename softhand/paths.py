@@ -3,15 +3,13 @@
 Every command that reads or writes calibration data or reports takes its default folder from here,
 so ``softhand fe sweep`` writes where ``softhand calibrate`` reads, whatever the working directory:
 
-=================  ==========================================  ============================
-name               folder                                      written by / read by
-=================  ==========================================  ============================
-``FE_DIR``         ``calibration/fe`` (+ ``speed-5``, ``-2``)  ``fe sweep`` / ``calibrate``
-``SKINS_DIR``      ``calibration/skins``                       ``calibrate`` / hands, envs
-``SENSORS_DIR``    ``calibration/sensors`` (+ ``fe``)          ``sensors calibrate`` / envs
-``REPORTS_DIR``    ``reports``                                 ``bench *``
-``cache_dir()``    ``~/.cache/softhand`` (``SOFTHAND_CACHE_DIR``) solved grasps / hands
-=================  ==========================================  ============================
+| name | folder | written by / read by |
+|---|---|---|
+| ``FE_DIR`` | ``calibration/fe`` (+ ``speed-5``, ``-2``) | ``fe sweep`` / ``calibrate`` |
+| ``SKINS_DIR`` | ``calibration/skins`` | ``calibrate`` / hands, envs |
+| ``SENSORS_DIR`` | ``calibration/sensors`` (+ ``fe``) | ``sensors calibrate`` / envs |
+| ``REPORTS_DIR`` | ``reports`` | ``bench *`` |
+| ``cache_dir()`` | ``~/.cache/softhand`` (``SOFTHAND_CACHE_DIR``) | solved grasps / hands |
 
 The shipped data is the package ``softhand.calibration`` (``calibration/`` of the repository, read
 through importlib.resources), so a regular (non-editable) install finds it as a checkout does.

@@ -9,7 +9,7 @@
 - picture: the scene's offscreen picture (``render_mode="rgb_array"``, ``softhand render``);
 - physics, sensing, skins, models, controllers, run: the pieces the env and its runs use.
 
-Importing this package registers ``softhand/Handshake-v0``::
+Importing this package registers ``softhand/Handshake-v0``:
 
     import gymnasium as gym
     import softhand.envs  # noqa: F401  (registers the env)

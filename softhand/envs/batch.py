@@ -3,20 +3,17 @@
 `BatchPhysics` implements the seam of `MujocoPhysics` over
 arrays with a leading world axis, for the vector env (`softhand.envs.vector`):
 
-============================== =====================================================================
-``reset(worlds, pos, quat, …)`` MuJoCo's reset of the given worlds, their mounts placed, motors
-                               pre-shaped (as MujocoPhysics.reset, per world)
-``ctrl``                       (W, nu) the worlds' controls, written before ``advance``
-``advance(live, mount_paths)`` one action period of the ``live`` worlds: ``frame_skip`` steps,
-                               each world's mount on its path (W, frame_skip, 3); returns a
-                               `Divergence` or None per world
-``region_forces()``            (W, regions) force (N) of each region, and the bones' part
-``saturated_sensors()``        (W,) region sensors that matched more contacts than slots
-``partner_feel()``             (W, phalanges) net force on each of the partner's phalanx tissues
-``contacts_above(w, limits)``  world w's contacts beyond their pair's calibrated range
-``qpos(index)``, ``qvel``      (W, k) the entries ``index`` (W, k) of each world's state
-``time``                       (W,) each world's time (s)
-============================== =====================================================================
+- ``reset(worlds, pos, quat, …)``: MuJoCo's reset of the given worlds, their mounts placed, motors
+  pre-shaped (as MujocoPhysics.reset, per world)
+- ``ctrl``: (W, nu) the worlds' controls, written before ``advance``
+- ``advance(live, mount_paths)``: one action period of the ``live`` worlds: ``frame_skip`` steps,
+  each world's mount on its path (W, frame_skip, 3); returns a `Divergence` or None per world
+- ``region_forces()``: (W, regions) force (N) of each region, and the bones' part
+- ``saturated_sensors()``: (W,) region sensors that matched more contacts than slots
+- ``partner_feel()``: (W, phalanges) net force on each of the partner's phalanx tissues
+- ``contacts_above(w, limits)``: world w's contacts beyond their pair's calibrated range
+- ``qpos(index)``, ``qvel``: (W, k) the entries ``index`` (W, k) of each world's state
+- ``time``: (W,) each world's time (s)
 
 Worlds whose compiled models give MuJoCo's data the same layout share one
 ``mujoco.batch.Batch`` (``set_models``: each world its own model, e.g. other skins, whose pair

@@ -50,16 +50,12 @@ class HandshakeEnv(TwoHandTouchEnv):
     (positive closes; 1 = full speed, which closes a digit from open in about 1 s). Each entry's
     name and unit is in ``env.unwrapped.action_names`` (`softhand.envs.spaces`):
 
-    ===== ============================================ ===================================
-    index name                                         drives
-    ===== ============================================ ===================================
-    0     speed/pro_index_motor [fraction of max]      index finger
-    1     speed/pro_middle_motor [fraction of max]     middle finger
-    2     speed/pro_ring_motor [fraction of max]       ring finger
-    3     speed/pro_little_motor [fraction of max]     little finger
-    4     speed/pro_thumb_flex_motor [fraction of max] thumb flexion
-    5     speed/pro_thumb_rot_motor [fraction of max]  thumb rotation (towards opposition)
-    ===== ============================================ ===================================
+    - 0 `speed/pro_index_motor [fraction of max]`: index finger
+    - 1 `speed/pro_middle_motor [fraction of max]`: middle finger
+    - 2 `speed/pro_ring_motor [fraction of max]`: ring finger
+    - 3 `speed/pro_little_motor [fraction of max]`: little finger
+    - 4 `speed/pro_thumb_flex_motor [fraction of max]`: thumb flexion
+    - 5 `speed/pro_thumb_rot_motor [fraction of max]`: thumb rotation (towards opposition)
 
     Observation space: ``Box(-inf, inf, (2 n + 19,), float64)`` with n the prosthetic hand's
     joints (16 by default); ``(2 n + 37,)`` with ``observe="both"``. Each entry's name and unit
@@ -67,29 +63,20 @@ class HandshakeEnv(TwoHandTouchEnv):
     ``sensor_patch/Index1 [N]``, ``episode_fraction [-]``); the 18 region values, in
     ``region_names`` order, are chosen by ``observe``:
 
-    ================== ========================== ================================================
-    slice              name                       quantity
-    ================== ========================== ================================================
-    [0, n)             qpos/<joint> [rad]         prosthetic joint positions, in the model's order
-                                                  (pro_index_mcp, ...; a relaxation pad's slide
-                                                  joints in m)
-    [n, 2n)            qvel/<joint> [rad/s]       prosthetic joint velocities (slides: m/s)
-    [2n, 2n + 18)      sensor_patch/<region> [N]  observe="sensor" (default) or "both": per
-                                                  region, the reading of the region's embedded
-                                                  sensor on its 4 x 4 mm patch, a fraction of the
-                                                  region's load (info["sensor_readings_N"])
-    [2n, 2n + 18)      load_estimate/<region> [N] observe="load": per region, the load a
-                                                  calibrated read-out infers from that reading,
-                                                  the transfer law inverted, 0 inside a pocket's
-                                                  dead band (info["sensor_load_estimate_N"])
-    [2n, 2n + 18)      region_load/<region> [N]   observe="contact": per region, the true normal
-                                                  contact force on the region
-                                                  (info["region_forces_N"])
-    [2n + 18, 2n + 36) region_load/<region> [N]   observe="both": per region, the true normal
-                                                  contact force on the region
-                                                  (info["region_forces_N"])
-    last               episode_fraction [-]       time since the start / handshake duration
-    ================== ========================== ================================================
+    - [0, n) `qpos/<joint> [rad]`: prosthetic joint positions, in the model's order (pro_index_mcp,
+      ...; a relaxation pad's slide joints in m)
+    - [n, 2n) `qvel/<joint> [rad/s]`: prosthetic joint velocities (slides: m/s)
+    - [2n, 2n + 18) `sensor_patch/<region> [N]`: observe="sensor" (default) or "both": per region,
+      the reading of the region's embedded sensor on its 4 x 4 mm patch, a fraction of the region's
+      load (info["sensor_readings_N"])
+    - [2n, 2n + 18) `load_estimate/<region> [N]`: observe="load": per region, the load a calibrated
+      read-out infers from that reading, the transfer law inverted, 0 inside a pocket's dead band
+      (info["sensor_load_estimate_N"])
+    - [2n, 2n + 18) `region_load/<region> [N]`: observe="contact": per region, the true normal
+      contact force on the region (info["region_forces_N"])
+    - [2n + 18, 2n + 36) `region_load/<region> [N]`: observe="both": per region, the true normal
+      contact force on the region (info["region_forces_N"])
+    - last `episode_fraction [-]`: time since the start / handshake duration
 
     Embedded sensors (`softhand.envs.sensing`): each region's sensor sits under its skin at
     ``sensor_placement`` (default ``interface``, under the outer layer; ``bone``;

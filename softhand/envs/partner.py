@@ -3,15 +3,13 @@
 Timeline (Cabibihan et al., "Handshake timing", Front. Robot. AI 2022: a handshake lasts
 3.63 +/- 0.45 s: reach 0.92 s, contact 1.96 s with a 1.31 s main shake, return 0.75 s):
 
-========== ============================================================================
-phase      what the partner does
-========== ============================================================================
-reach      mount moves from its start pose to the contact pose (minimum-jerk), 0.92 s
-grip       fingers and thumb close until the grip force reaches its target, 0.30 s
-shake      mount oscillates at 4 Hz (Melnyk et al., IEEE AIM 2014), 1.31 s
-release    fingers open, 0.35 s (the rest of the 1.96 s contact)
-return     mount goes back to its start pose, 0.75 s
-========== ============================================================================
+| phase | what the partner does |
+|---|---|
+| reach | mount moves from its start pose to the contact pose (minimum-jerk), 0.92 s |
+| grip | fingers and thumb close until the grip force reaches its target, 0.30 s |
+| shake | mount oscillates at 4 Hz (Melnyk et al., IEEE AIM 2014), 1.31 s |
+| release | fingers open, 0.35 s (the rest of the 1.96 s contact) |
+| return | mount goes back to its start pose, 0.75 s |
 
 Grip: the partner reaches with an open hand, closes to its grasp posture (solved from the
 handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impedance towards the

@@ -4,19 +4,17 @@
 partner's script, the controllers' interface, the reward and the observation; everything that
 touches MuJoCo's state during an episode goes through `MujocoPhysics`:
 
-============================== =====================================================================
-``reset(mount_pos, quat, ...)``MuJoCo's reset, the partner's mount placed, motors pre-shaped
-``advance(ctrl, mount_path)``  one action period: ``frame_skip`` steps, the mount following its
-                               prescribed path (one row per step), sensors read on the last step;
-                               returns None, or the `Divergence` that ended it
-``region_forces()``            force (N) of each region: its skin's contact sensor and its bones
-                               bottoming out under it; and the bones' part
-``saturated_sensors()``        region sensors that matched more contacts than they have slots
-``partner_feel()``             net force (N) on each of the partner's phalanx tissues
-``contacts_above(limits)``     the contacts whose normal force exceeds their pair's calibrated
-                               range: geom pairs and forces
-``qpos``, ``qvel``, ``time``   the state
-============================== =====================================================================
+- ``reset(mount_pos, quat, ...)``: MuJoCo's reset, the partner's mount placed, motors pre-shaped
+- ``advance(ctrl, mount_path)``: one action period: ``frame_skip`` steps, the mount following its
+  prescribed path (one row per step), sensors read on the last step; returns None, or the
+  `Divergence` that ended it
+- ``region_forces()``: force (N) of each region: its skin's contact sensor and its bones bottoming
+  out under it; and the bones' part
+- ``saturated_sensors()``: region sensors that matched more contacts than they have slots
+- ``partner_feel()``: net force (N) on each of the partner's phalanx tissues
+- ``contacts_above(limits)``: the contacts whose normal force exceeds their pair's calibrated range:
+  geom pairs and forces
+- ``qpos``, ``qvel``, ``time``: the state
 
 `softhand.envs.batch.BatchPhysics` implements the same methods over arrays with a leading
 world axis (``mujoco.batch``: W worlds on threads), for the vector env (softhand.envs.vector); the

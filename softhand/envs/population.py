@@ -2,22 +2,17 @@
 
 The paper's handshake experiment: one experimenter (190 x 88 mm hand, Table 1) shook hands with 30
 male subjects; the sensors on the experimenter's hand recorded each region's force, and Fig. 4
-marks the regions where it exceeded 2 N. Here each partner is drawn from published distributions:
+marks the regions where it exceeded 2 N. Here each partner is drawn from published
+distributions; each quantity, its distribution (normal ones truncated at +-2.5 SD) and its source:
 
-================== ===================================================== =========================
-quantity           distribution (truncated at +-2.5 SD)                  source
-================== ===================================================== =========================
-hand length        normal, 187.5 +- 11.37 mm                            paper Table 1 (subjects)
-hand width         normal, 89.53 +- 6.80 mm, independent of the length   paper Table 1; independence
-                                                                         is an assumption (Table 1
-                                                                         gives no correlation)
-grip per phalanx   normal, 2.5 +- 0.5 N                                  mean: Melnyk et al., IEEE
-                                                                         AIM 2014 (data gloves);
-                                                                         SD: assumption (20 %)
-duration           normal, 3.63 +- 0.45 s (phases scale together)        Cabibihan et al., Front.
-                                                                         Robot. AI 2022
-shake phase        uniform in [0, 2 pi)                                  -
-================== ===================================================== =========================
+- hand length: normal, 187.5 +- 11.37 mm; paper Table 1 (subjects)
+- hand width: normal, 89.53 +- 6.80 mm, independent of the length; paper Table 1 (independence is
+  an assumption: Table 1 gives no correlation)
+- grip per phalanx: normal, 2.5 +- 0.5 N; mean: Melnyk et al., IEEE AIM 2014 (data gloves); SD:
+  an assumption (20 %)
+- duration: normal, 3.63 +- 0.45 s (the phases scale together); Cabibihan et al., Front. Robot. AI
+  2022
+- shake phase: uniform in [0, 2 pi)
 
 `sample_partners` draws them from one seed (reproducible); `run_partner` runs one
 handshake for one partner (a module-level function, so it runs in worker processes);

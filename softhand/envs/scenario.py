@@ -5,21 +5,19 @@ The env owns what every touch shares: the two hands and their skins, the sensors
 behind its seam, the prosthetic's action, the observation, the force accounting. A scenario owns
 what makes one touch that touch:
 
-======================== =================================================================
-``prepare(env)``          once, after the scene is built: what the touch needs of the two
-                          hands (the handshake solves its grasp); returns the sensored
-                          hand's pre-shaped drives as (qpos address, act address, value)
-``reset(env, rng, opts)`` each episode: the partner's plan (its mount's start pose, timing,
-                          grip) from the episode's random stream and the reset options
-``mount(t)``              the partner's mount position at time t (m, world frame);
-                          ``mount_path(times)`` at many (default: mount(t) for each)
-``partner_targets(...)``  the partner's digit servo targets at time t, from what its digits
-                          feel (once per action step)
-``sensored_targets(t)``   the relaxed human sensored hand's drive targets (``hand="human"``)
-``phase(t)``              the phase's name at time t; ``duration_s`` the episode's length
-``reward_terms(...)``     the reward's terms at a step
-``info()``                the scenario's own ``info`` entries
-======================== =================================================================
+- ``prepare(env)``: once, after the scene is built: what the touch needs of the two hands (the
+  handshake solves its grasp); returns the sensored hand's pre-shaped drives as (qpos address, act
+  address, value)
+- ``reset(env, rng, opts)``: each episode: the partner's plan (its mount's start pose, timing, grip)
+  from the episode's random stream and the reset options
+- ``mount(t)``: the partner's mount position at time t (m, world frame); ``mount_path(times)`` at
+  many (default: mount(t) for each)
+- ``partner_targets(...)``: the partner's digit servo targets at time t, from what its digits feel
+  (once per action step)
+- ``sensored_targets(t)``: the relaxed human sensored hand's drive targets (``hand="human"``)
+- ``phase(t)``: the phase's name at time t; ``duration_s`` the episode's length
+- ``reward_terms(...)``: the reward's terms at a step
+- ``info()``: the scenario's own ``info`` entries
 
 Class attributes name the phases, the phases in which the hands hold each other (``engaged``;
 controllers close, the reward counts a grip) and those in which the sensored hand lets go

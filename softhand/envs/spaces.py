@@ -107,37 +107,30 @@ def observation_rows() -> list[tuple[str, str, str]]:
     return rows
 
 
-def _rst(header: tuple[str, ...], rows: list[tuple[str, ...]], width: int) -> list[str]:
-    """A reStructuredText simple table, the last column wrapped to ``width`` characters."""
-    wrapped = [(*r[:-1], textwrap.wrap(r[-1], width)) for r in rows]
-    cols = [max(len(header[k]), *(len(r[k]) for r in rows)) for k in range(len(header) - 1)]
-    cols.append(max(len(header[-1]), *(len(line) for r in wrapped for line in r[-1])))
-    rule = " ".join("=" * c for c in cols)
-
-    def line(cells) -> str:
-        return " ".join(c.ljust(w) for c, w in zip(cells, cols, strict=True)).rstrip()
-
-    out = [rule, line(header), rule]
-    for *first, text in wrapped:
-        out.append(line((*first, text[0])))
-        out += [line(("",) * len(first) + (more,)) for more in text[1:]]
-    return [*out, rule]
+def _bullets(rows: list[tuple[str, ...]], width: int = 96) -> list[str]:
+    """A Markdown bullet list, one row an item (``- first `name`: what``), wrapped to ``width``
+    characters: it reads as text in ``help()`` and renders in the API reference, where a table
+    of these long rows would not fit a docstring line."""
+    out = []
+    for first, name, what in rows:
+        out += textwrap.wrap(f"- {first} `{name}`: {what}", width, subsequent_indent="  ",
+                             break_long_words=False, break_on_hyphens=False)
+    return out
 
 
 def action_table(markdown: bool = False) -> str:
-    """The actions as a table: reStructuredText for the docstring, or Markdown for the docs."""
-    return _table(("index", "name", "drives"), action_rows(), markdown, 36)
+    """The actions: a bullet list for the docstring, or a Markdown table for the docs."""
+    return _table(("index", "name", "drives"), action_rows(), markdown)
 
 
 def observation_table(markdown: bool = False) -> str:
-    """The observation's layout as a table: reStructuredText for the docstring, or Markdown."""
-    return _table(("slice", "name", "quantity"), observation_rows(), markdown, 48)
+    """The observation's layout: a bullet list for the docstring, or a Markdown table."""
+    return _table(("slice", "name", "quantity"), observation_rows(), markdown)
 
 
-def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], markdown: bool,
-           width: int) -> str:
+def _table(header: tuple[str, ...], rows: list[tuple[str, ...]], markdown: bool) -> str:
     if not markdown:
-        return "\n".join(_rst(header, rows, width))
+        return "\n".join(_bullets(rows))
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(f"`{c}`" if k == 1 else c for k, c in enumerate(r)) + " |"
               for r in rows]

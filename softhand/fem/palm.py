@@ -1,7 +1,7 @@
 """The palm (and the back of the hand): a slab of a design's skin layers over a metacarpal.
 
 Cross-section of one cell (x across the metacarpals, y up from the floor between them, z along
-the metacarpal; the cells repeat across the hand)::
+the metacarpal; the cells repeat across the hand):
 
     y = rise + skin  ─────────────────────────────  flat top: outer surface, the indenter's face
                      outer layer, roof, pocket (|x| <= the design's pocket_half_width_mm), floor:

@@ -2,13 +2,11 @@
 
 A prosthetic skin's sensors sit inside it. Three placements (`PLACEMENTS`):
 
-=================== ====================================================================
-``bone``            on the fixed base (the bone under the core): the support's reaction
-``interface``       at the core / outer-layer interface (under the 0.8 mm outer layer): the
-                    force the outer layer passes to the core
-``pocket-floor``    on the pocket's floor (pocketed designs): the roof's contact force, zero
-                    while the pocket is open
-=================== ====================================================================
+- ``bone``: on the fixed base (the bone under the core): the support's reaction
+- ``interface``: at the core / outer-layer interface (under the 0.8 mm outer layer): the force the
+  outer layer passes to the core
+- ``pocket-floor``: on the pocket's floor (pocketed designs): the roof's contact force, zero while
+  the pocket is open
 
 A patch (`SensorPatch`) is a rectangle in plan view (``width_mm`` across the finger,
 ``length_mm`` along it, centred at ``center_x_mm``, ``center_z_mm`` from the apex line and the

@@ -1,6 +1,6 @@
 """Run many designs, compare them with the paper, and write curves with provenance.
 
-Output folder layout (``calibration/fe`` by default)::
+Output folder layout (``calibration/fe`` by default):
 
     {design}.csv        time_s, displacement_mm, force_N, hold (0 ramp / 1 hold)
     summary.json        per-design results, paper numbers, errors, settings and provenance

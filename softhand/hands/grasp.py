@@ -17,23 +17,21 @@ A handshake is defined by its contacts, not by a clearance rule. Descriptions us
 
 Targets (residuals of a least-squares problem, lengths in m; `solve_grasp`):
 
-============== ============================================================================
-palms          each prosthetic palmar piece (Palm1, Palm2) touches the partner's palmar tissue,
-               pressed ``press_m``; the two palm normals are opposite
-web spaces     the two web points (radial border of the index metacarpal, half-way between the
-               thumb's CMC and the index MCP) coincide in the plane of the palms
-thumbs         each thumb's pad on the back of the other hand's index metacarpal (60 % of its
-               length from the CMC, on the dorsal skin plane)
-fingers        each phalanx touches the other hand (gap penalised beyond ``press_m``); each
-               fingertip past the other hand's mid-plane onto its back (one-sided)
-penetration    no soft piece pressed more than ``max_depth_m`` into a piece of the other hand;
-               bones of the two hands at least ``bone_clearance_m`` apart
-self-contact   no piece of a hand inside another piece of the same hand (thumb on fingers,
-               neighbouring fingers)
-joint limits   hard bounds: the partner's joints stay ``limit_margin_deg`` inside their human
-               range ([AAOS65]), the prosthetic's motors inside theirs
-posture prior  a weak pull towards a relaxed mid-flexion posture, so the problem is well posed
-============== ============================================================================
+- palms: each prosthetic palmar piece (Palm1, Palm2) touches the partner's palmar tissue, pressed
+  ``press_m``; the two palm normals are opposite
+- web spaces: the two web points (radial border of the index metacarpal, half-way between the
+  thumb's CMC and the index MCP) coincide in the plane of the palms
+- thumbs: each thumb's pad on the back of the other hand's index metacarpal (60 % of its length from
+  the CMC, on the dorsal skin plane)
+- fingers: each phalanx touches the other hand (gap penalised beyond ``press_m``); each fingertip
+  past the other hand's mid-plane onto its back (one-sided)
+- penetration: no soft piece pressed more than ``max_depth_m`` into a piece of the other hand; bones
+  of the two hands at least ``bone_clearance_m`` apart
+- self-contact: no piece of a hand inside another piece of the same hand (thumb on fingers,
+  neighbouring fingers)
+- joint limits: hard bounds: the partner's joints stay ``limit_margin_deg`` inside their human range
+  ([AAOS65]), the prosthetic's motors inside theirs
+- posture prior: a weak pull towards a relaxed mid-flexion posture, so the problem is well posed
 
 The solution is found in two stages: first without the penetration and self-contact terms (the
 digits reach their targets through whatever lies between), then with them (each digit settles

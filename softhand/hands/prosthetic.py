@@ -2,13 +2,11 @@
 
 Actuation (6 motors, like an i-Limb / bebionic-class hand with powered thumb rotation, [Belter13]):
 
-====================== ============================ =====================================
-actuator               drives                       coupled joints (equality, ratio)
-====================== ============================ =====================================
-``{finger}_motor`` x4  ``{finger}_mcp``             pip = 1 x mcp, dip = 2/3 x pip
-``thumb_flex_motor``   ``thumb_mcp``                cmc = 15/50 x mcp, ip = 80/50 x mcp
-``thumb_rot_motor``    ``thumb_rot``                -
-====================== ============================ =====================================
+| actuator | drives | coupled joints (equality, ratio) |
+|---|---|---|
+| ``{finger}_motor`` x4 | ``{finger}_mcp`` | pip = 1 x mcp, dip = 2/3 x pip |
+| ``thumb_flex_motor`` | ``thumb_mcp`` | cmc = 15/50 x mcp, ip = 80/50 x mcp |
+| ``thumb_rot_motor`` | ``thumb_rot`` | - |
 
 The coupling ratios make every joint of a digit reach its upper limit together
 (constants.PROSTHETIC_RANGE_DEG); DIP = 2/3 PIP is the human free-motion coupling [Rijpkema91].

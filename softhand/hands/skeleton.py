@@ -2,17 +2,15 @@
 
 Names (``prefix`` + ...):
 
-=========================== ================================================================
-``palm``                    palm body; carries the four finger metacarpal bones
-``thumb_metacarpal``        thumb metacarpal body; joints ``thumb_rot`` then ``thumb_cmc``
-``thumb_proximal``          joint ``thumb_mcp``
-``thumb_distal``            joint ``thumb_ip``; site ``thumb_tip``
-``{finger}_proximal``       joint ``{finger}_mcp`` (finger: index, middle, ring, little)
-``{finger}_middle``         joint ``{finger}_pip``
-``{finger}_distal``         joint ``{finger}_dip``; site ``{finger}_tip``
-``bone_{segment}``          capsule bone geom of a segment (palm: ``bone_{finger}_metacarpal``)
-``wrist_crease``            site at the palm origin: the hand-length landmark
-=========================== ================================================================
+- ``palm``: palm body; carries the four finger metacarpal bones
+- ``thumb_metacarpal``: thumb metacarpal body; joints ``thumb_rot`` then ``thumb_cmc``
+- ``thumb_proximal``: joint ``thumb_mcp``
+- ``thumb_distal``: joint ``thumb_ip``; site ``thumb_tip``
+- ``{finger}_proximal``: joint ``{finger}_mcp`` (finger: index, middle, ring, little)
+- ``{finger}_middle``: joint ``{finger}_pip``
+- ``{finger}_distal``: joint ``{finger}_dip``; site ``{finger}_tip``
+- ``bone_{segment}``: capsule bone geom of a segment (palm: ``bone_{finger}_metacarpal``)
+- ``wrist_crease``: site at the palm origin: the hand-length landmark
 
 Every joint flexes for a positive angle. Digit bodies use the digit frame: +x along the segment,
 +y the flexion axis, -z the palmar (pad) side; long fingers share the hand frame's orientation.

@@ -1,6 +1,6 @@
 """``softhand sensors calibrate``: FE sensor records of the 12 designs and their transfer laws.
 
-Folder layout (``calibration/sensors`` by default)::
+Folder layout (``calibration/sensors`` by default):
 
     fe/{design}.csv            time_s, force_N (plate), hold, {sensor}_N per patch: 0.5 mm/s
     fe/speed-2/{design}.csv    the same at 2 mm/s (validation)

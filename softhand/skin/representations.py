@@ -4,17 +4,14 @@ A representation is how a calibrated skin law becomes MuJoCo elements. Each clas
 whole contract of its level of detail, and every stage goes through it (the rig, ``softhand
 calibrate``, the benchmarks, the hands): adding a representation means adding a class here.
 
-=========================== ================================================ ====================
-name                        MuJoCo elements                                  memory (relaxation)
-=========================== ================================================ ====================
-``rigid``                   the geom's stock contact (MuJoCo's defaults)     none, and no law
-``soft-contact``            the pair's solref/solimp, fitted to the loading  none: the 0.5 mm/s
-                            curve (`softhand.skin.soft_contact`)             loading curve
-``soft-contact+relaxation`` a pad body on a slide joint with the QLV law's   QLV, exact for the
-                            spline spring and Maxwell branches               law's Prony terms
-                            (`softhand.skin.pad`)
-``flex``                    a tetrahedral flex pad (`softhand.skin.flex`) none (SVK solid)
-=========================== ================================================ ====================
+Each representation, the MuJoCo elements it adds, and its memory (relaxation):
+
+- ``rigid``: the geom's stock contact (MuJoCo's defaults); no memory, and no law
+- ``soft-contact``: the pair's solref/solimp, fitted to the loading curve
+  (`softhand.skin.soft_contact`); no memory: the 0.5 mm/s loading curve
+- ``soft-contact+relaxation``: a pad body on a slide joint with the QLV law's spline spring and
+  Maxwell branches (`softhand.skin.pad`); QLV, exact for the law's Prony terms
+- ``flex``: a tetrahedral flex pad (`softhand.skin.flex`); no memory (SVK solid)
 
 Every class provides: `Representation.fit` (from a skin law and its FE curve),
 `parse` / `to_dict` (the calibration file),

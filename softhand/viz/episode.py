@@ -2,7 +2,7 @@
 
 `record` runs the episode with `softhand.envs.run.run_policy` (what the built-in
 controllers' runs collect: the state, region forces, sensor readings and contacts at every env
-step) and writes it with `softhand.viz.recording.record_handshake` (its entity paths)::
+step) and writes it with `softhand.viz.recording.record_handshake` (its entity paths):
 
     import gymnasium as gym
     import softhand.envs  # noqa: F401  (registers softhand/Handshake-v0)
