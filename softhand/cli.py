@@ -717,10 +717,10 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         raise Stopped(f"error: {exc.summary}; try a smaller --timestep (e.g. "
                       f"{exc.suggested_timestep_s:g})", EXIT_CONVERGENCE) from None
     if record is not None:
-        from softhand.bench.handshake import frames_of
         from softhand.viz import record_handshake
+        from softhand.viz.recording import HandshakeFrames
 
-        record_handshake(record, run.model, frames_of(run))
+        record_handshake(record, run.model, HandshakeFrames.from_run(run))
     summary = run.summary()
     frame_skip = int(env.frame_skip)
     summary["settings"] = {

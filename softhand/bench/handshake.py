@@ -30,13 +30,13 @@ from typing import Any
 
 from softhand.bench.common import machine_info, machine_line
 from softhand.envs.controllers import CONTROLLERS
-from softhand.envs.run import OVER_N, HandshakeRun, run_handshake
+from softhand.envs.run import OVER_N, run_handshake
 from softhand.io import atomic_write_json, atomic_write_text
 from softhand.paper import paper
 from softhand.paths import REPORTS_DIR
 from softhand.viz.recording import HandshakeFrames, record_handshake
 
-__all__ = ["SENSITIVITY_SKINS", "frames_of", "run_handshake_benchmark"]
+__all__ = ["SENSITIVITY_SKINS", "run_handshake_benchmark"]
 
 REPEATS = 3
 TIMESTEPS_S = (0.002, 0.001, 0.0005)  # the default first; the last is the reference of the errors
@@ -44,13 +44,6 @@ ERROR_SEEDS = (0, 1, 2, 3)
 SENSITIVITY_SKINS = ("rigid", "prosthetic-102l", "solid-sil", "solid-pu", "pocket1-sil",
                      "pocket2-sil", "pocket2-pu")
 REPRESENTATION_DESIGNS = ("pocket2-sil", "pocket2-pu")  # a silicone and a polyurethane skin
-
-
-def frames_of(run: HandshakeRun) -> HandshakeFrames:
-    """What a recording of ``run`` holds."""
-    return HandshakeFrames(run.time_s, run.qpos, run.mocap_pos, run.mocap_quat, run.region_force_N,
-                           run.region_names, run.skins, run.contacts, run.phase,
-                           run.sensor_reading_N, run.sensor_placements)
 
 
 def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
@@ -62,7 +55,8 @@ def _speed(timestep_s: float, *, record: bool) -> dict[str, float]:
         if record:
             with tempfile.TemporaryDirectory() as tmp:
                 t0 = time.perf_counter()
-                record_handshake(Path(tmp) / "bench.rrd", run.model, frames_of(run))
+                record_handshake(Path(tmp) / "bench.rrd", run.model,
+                                 HandshakeFrames.from_run(run))
                 wall += time.perf_counter() - t0
         row = {"steps": run.steps, "sim_s": sim, "wall_s": wall, "steps_per_s": run.steps / wall,
                "realtime_factor": sim / wall}
