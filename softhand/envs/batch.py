@@ -71,6 +71,7 @@ class _Group:
         self.ctrl, self.act = b.bind("ctrl"), b.bind("act")
         self.mocap_pos, self.mocap_quat = b.bind("mocap_pos"), b.bind("mocap_quat")
         self.sensordata = b.bind("sensordata")
+        self.ncon = b.bind("ncon")  # contacts per world, without copying its data
         self.scratch = mujoco.MjData(models[0])  # get_data's target (a new MjData costs ~1 ms)
         self.sensors_on = True  # the models as compiled
 
@@ -254,5 +255,9 @@ class BatchPhysics:
 
     def contacts_above(self, world: int, limits: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """World ``world``'s contacts beyond ``limits`` (MujocoPhysics.contacts_above)."""
+        """World ``world``'s contacts beyond ``limits`` (MujocoPhysics.contacts_above); a world
+        without contacts (the reach, the return) is answered without copying its data."""
+        g = self.groups[self._group_of[world]]
+        if g.ncon[self._local[world]] == 0:
+            return np.zeros((0, 2), int), np.zeros(0), np.zeros(0)
         return contacts_above(self.data(world), limits)
