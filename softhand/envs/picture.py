@@ -80,16 +80,18 @@ def posed_data(model: mujoco.MjModel, qpos, mocap_pos, mocap_quat,
     return data
 
 
-def hand_colours(model: mujoco.MjModel) -> dict[int, tuple[float, ...]]:
-    """Geom id -> its hand's colour (HAND_COLOURS, by name prefix); a hidden geom (alpha 0, e.g.
-    the skin a flex pad replaces) stays hidden."""
+def hand_colours(model: mujoco.MjModel, prefixes: tuple[str, ...] = tuple(HAND_COLOURS)
+                 ) -> dict[int, tuple[float, ...]]:
+    """Geom id -> its hand's colour (HAND_COLOURS, by name prefix; ``prefixes``: of these hands
+    only, e.g. the partner's where the prosthetic's skin is coloured by force); a hidden geom
+    (alpha 0, e.g. the skin a flex pad replaces) stays hidden."""
     out = {}
     for g in range(model.ngeom):
         if model.geom_rgba[g, 3] == 0:
             continue
-        for prefix, colour in HAND_COLOURS.items():
+        for prefix in prefixes:
             if model.geom(g).name.startswith(prefix):
-                out[g] = colour
+                out[g] = HAND_COLOURS[prefix]
     return out
 
 

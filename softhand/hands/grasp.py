@@ -308,16 +308,14 @@ class _Problem:
         out = np.full(len(pairs), cap)
         candidates = self.lower_bounds(pairs) < above + _PRUNE_M
         if self._moved is None:
-            for i in np.flatnonzero(candidates):
-                out[i] = mujoco.mj_geomDistance(self.m, self.d, int(pairs[i, 0]),
-                                                int(pairs[i, 1]), cap, self.dist)
-            return out
-        # inside jacobian(): pairs that did not move keep their measured distance
-        known = self._known.setdefault((id(pairs), cap), np.full(len(pairs), np.nan))
-        fixed = ~(self._moved[pairs[:, 0]] | self._moved[pairs[:, 1]])
-        reuse = candidates & fixed & ~np.isnan(known)
-        out[reuse] = known[reuse]
-        for i in np.flatnonzero(candidates & ~reuse):
+            fixed, known = np.zeros(len(pairs), bool), None  # nothing kept
+        else:  # inside jacobian(): pairs that did not move keep their measured distance
+            known = self._known.setdefault((id(pairs), cap), np.full(len(pairs), np.nan))
+            fixed = ~(self._moved[pairs[:, 0]] | self._moved[pairs[:, 1]])
+            reuse = candidates & fixed & ~np.isnan(known)
+            out[reuse] = known[reuse]
+            candidates &= ~reuse
+        for i in np.flatnonzero(candidates):
             out[i] = mujoco.mj_geomDistance(self.m, self.d, int(pairs[i, 0]), int(pairs[i, 1]),
                                             cap, self.dist)
             if fixed[i]:

@@ -20,7 +20,8 @@ from scipy.interpolate import BSpline
 
 from softhand.validate import check_mapping, check_numbers, join
 
-__all__ = ["ElasticLaw", "basis_matrix", "knot_vector", "knots_at", "monotone_inverse"]
+__all__ = ["ElasticLaw", "MonotoneInverse", "basis_matrix", "knot_vector", "knots_at",
+           "monotone_inverse"]
 
 _DEGREE = 2  # stiffness degree; force is one degree higher
 
@@ -58,8 +59,20 @@ def monotone_inverse(y, x, f) -> np.ndarray:
     at increasing ``x``) reaches each ``y``, linear between samples, clamped to the table's ends.
     A flat or slightly falling step of the samples (round-off of a tabulated ramp) is taken as
     flat, so that the inverse stays single-valued. (A law inverts itself exactly:
-    `ElasticLaw.displacement_at`.)"""
-    return np.interp(y, np.maximum.accumulate(np.asarray(f, dtype=float)), x)
+    `ElasticLaw.displacement_at`; a table inverted many times: `MonotoneInverse`.)"""
+    return MonotoneInverse(x, f)(y)
+
+
+class MonotoneInverse:
+    """`monotone_inverse` of one table, called many times: the samples made single-valued (their
+    running maximum) once, when made, instead of at every call."""
+
+    def __init__(self, x, f) -> None:
+        self.x = np.asarray(x, dtype=float)
+        self.f = np.maximum.accumulate(np.asarray(f, dtype=float))
+
+    def __call__(self, y) -> np.ndarray:
+        return np.interp(y, self.f, self.x)
 
 
 @dataclass(frozen=True)

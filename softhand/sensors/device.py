@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from softhand.laws.elastic import MonotoneInverse
 from softhand.sensors.transfer import TransferLaw
 from softhand.validate import check_number
 
@@ -127,12 +128,8 @@ class _Share:
         self.u = np.linspace(0.0, top, int(np.ceil(top / self.STEP_N)) + 1)
         self.g = law.share.force(self.u)
         self.top, self.k_top = top, law.share.end_stiffness
-        # the table as monotone_inverse takes it (its running maximum), made once, not per step
-        self.g_rising = np.maximum.accumulate(self.g)
-
-    def inverse(self, g: np.ndarray) -> np.ndarray:
-        """u at which the share reaches ``g``: monotone_inverse(g, u, g(u)) of the table."""
-        return np.interp(g, self.g_rising, self.u)
+        #: u at which the share reaches g (the table's monotone inverse, made once)
+        self.inverse = MonotoneInverse(self.u, self.g)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         out = np.interp(u, self.u, self.g, left=0.0)

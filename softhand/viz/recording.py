@@ -52,7 +52,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
-from softhand.envs.picture import HAND_COLOURS
+from softhand.envs.picture import hand_colours
 from softhand.hands import regions
 from softhand.io import check_writable_file
 from softhand.laws.fit import REFERENCE_FORCE_N
@@ -384,6 +384,7 @@ def _log_recording(
     loaded = set(_loaded(frames))
 
     bodies = [b for b in range(model.nbody) if model.body(b).name.startswith(HAND_PREFIXES)]
+    partner = hand_colours(model, ("hum_tissue_",))
     for g in range(model.ngeom):
         body = model.body(model.geom_bodyid[g]).name
         shape = _geom_shape(model, g) if body.startswith(HAND_PREFIXES) else None
@@ -395,10 +396,8 @@ def _log_recording(
         region = skin.get(name)
         colour = _colour_field(archetype)
         if region is None:  # a plain geom: static colour (the partner's tissue blue, as in
-            # every picture: softhand.envs.picture.HAND_COLOURS)
-            rgba = np.asarray(HAND_COLOURS["hum_tissue_"]) if (
-                name.startswith("hum_tissue_") and model.geom_rgba[g, 3] > 0) else \
-                model.geom_rgba[g]
+            # every picture)
+            rgba = np.asarray(partner.get(g, model.geom_rgba[g]))
             fields[colour] = [np.round(255 * rgba).astype(np.uint8)]
             log(entity, archetype.from_fields(**fields), static=True)
             continue

@@ -26,6 +26,7 @@ from softhand.envs.picture import (
     CameraView,
     ScenePicture,
     check_size,
+    hand_colours,
     posed_data,
 )
 from softhand.io import atomic_open, check_writable_file
@@ -96,17 +97,16 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
 
     fig, axes = plt.subplots(len(frames), len(SHEET_VIEWS), squeeze=False,
                              figsize=(3.2 * len(SHEET_VIEWS), 3.3 * len(frames)))
+    partner = hand_colours(model, ("hum_tissue_",))  # blue, as in every picture
     with ScenePicture(model, size, size) as picture:
         for row, frame in zip(axes, frames, strict=True):
             data = posed_data(model, frame.qpos, frame.mocap_pos, frame.mocap_quat)
             palms = [model.body(b).id for b in ("pro_palm", "hum_palm")]
             lookat = tuple(np.mean(data.xpos[palms], axis=0))
-            colours = {}
+            colours = dict(partner)
             for g in range(model.ngeom):
                 name = model.geom(g).name
-                if name.startswith("hum_tissue_"):
-                    colours[g] = HAND_COLOURS["hum_tissue_"]  # blue, as in every picture
-                elif name.startswith("pro_skin_"):
+                if name.startswith("pro_skin_"):
                     f = frame.region_force_N.get(name)
                     colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
                                   else tuple(force_colors(f) / 255.0))
