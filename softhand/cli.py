@@ -1131,17 +1131,21 @@ def bench_fe(out_dir, quick) -> None:
 @click.option("--scale", is_flag=True,
               help="Only the speed at scale (~3 min): one env, the vector env at 2-128 worlds, "
                    "the physics ceiling and the Python per stage (bench-handshake-scale.md).")
-@click.option("--worlds", default="2,8,32,128", show_default=True, metavar="N,N,...",
-              help="With --scale: the vector env's worlds, each 1-1024.")
+@click.option("--worlds", default=None, metavar="N,N,...",
+              help="With --scale: the vector env's worlds, each 1-1024 [default: 2,8,32,128].")
 def bench_handshake(out_dir, scale, worlds) -> None:
     """Handshake speed (recording off/on, 0.5-2 ms) and the skins side by side; --scale: the
     speed of one env, the vector env and the physics ceiling."""
-    try:
-        counts = tuple(int(v) for v in worlds.split(","))
-    except ValueError:
-        counts = ()
-    if not counts or not all(1 <= n <= 1024 for n in counts):
-        bad(f"--worlds {worlds!r}: expected integers 1-1024 separated by commas, e.g. 2,8,32")
+    if worlds is not None and not scale:
+        bad(f"--worlds {worlds!r}: only with --scale (the vector env is measured there)")
+    counts = None  # the benchmark's own default
+    if worlds is not None:
+        try:
+            counts = tuple(int(v) for v in worlds.split(","))
+        except ValueError:
+            counts = ()
+        if not counts or not all(1 <= n <= 1024 for n in counts):
+            bad(f"--worlds {worlds!r}: expected integers 1-1024 separated by commas, e.g. 2,8,32")
     out = checked_dir(out_dir, "--out")
     if scale:
         from softhand.bench.scale import run_scale_benchmark

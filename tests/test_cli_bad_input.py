@@ -65,6 +65,9 @@ def rejected(args: list[str], *needles: str, cwd: Path | None = None) -> str:
     (["handshake", "--seed", "-1"], ["'--seed'", "-1"]),
     (["handshake", "--seed", "1.5"], ["'--seed'", "1.5"]),
     (["fe", "export", "solid-pu", "x.inp", "--depth", "-2"], ["'--depth'", "'-2'"]),
+    (["bench", "handshake", "--scale", "--worlds", "2,0"], ["--worlds", "'2,0'", "1-1024"]),
+    (["bench", "handshake", "--scale", "--worlds", "8,x"], ["--worlds", "'8,x'", "1-1024"]),
+    (["bench", "handshake", "--worlds", "8"], ["--worlds", "'8'", "only with --scale"]),
 ])
 def test_numbers_outside_their_range(args, needles):
     rejected(args, *needles)

@@ -152,12 +152,13 @@ def _vector(worlds: int, steps: int, nthread: int | None) -> dict[str, Any]:
 
 
 def run_scale_benchmark(out_dir: str | Path = REPORTS_DIR, *,
-                        worlds: tuple[int, ...] = VECTOR_WORLDS, repeats: int = 3,
+                        worlds: tuple[int, ...] | None = None, repeats: int = 3,
                         nthread: int | None = None,
                         progress: Callable[[str], None] | None = None) -> str:
     """Run the benchmark (module docstring), write ``bench-handshake-scale.json`` and ``.md`` to
-    ``out_dir``, return the Markdown. ``nthread``: the vector env's threads (default: the CPUs
-    this process may use); ``progress`` gets a line before each part."""
+    ``out_dir``, return the Markdown. ``worlds``: the vector env's (default VECTOR_WORLDS);
+    ``nthread``: its threads (default: the CPUs this process may use); ``progress`` gets a line
+    before each part."""
     say = progress or (lambda line: None)
     out = Path(out_dir)
     data: dict[str, Any] = {"machine": machine_info()}
@@ -176,7 +177,7 @@ def run_scale_benchmark(out_dir: str | Path = REPORTS_DIR, *,
                        / stages["stages_us"]["physics"]}
     data["stages"] = stages
     data["vector"] = []
-    for n in worlds:
+    for n in VECTOR_WORLDS if worlds is None else worlds:
         say(f"vector env, {n} worlds")
         data["vector"].append(_vector(n, steps, nthread))
     data["nthread"] = nthread or data["machine"]["available_cpus"]
