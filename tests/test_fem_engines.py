@@ -128,3 +128,44 @@ def test_the_engine_is_checked_and_not_a_curve_setting():
     with pytest.raises(ValueError, match="engine = 'fast'"):
         IndentationSettings(engine="fast")
     assert "engine" not in _settings_of(IndentationSettings(engine="numpy"))
+
+
+def test_element_entries_sum_into_the_tangent_as_bincount_does():
+    """The compiled engine hands the solver unassembled element tangents: their sum in the
+    lower triangle equals the assembled pattern's values bit for bit, and the backtracking's
+    inversion count equals NumPy's determinant test."""
+    spec = IndentationSettings(mesh="coarse").mesh_spec
+    mesh = build_mesh(parse_design("pocket2-sil").geometry(), spec, dim=3)
+    mats = [material("sil"), material("sil")]
+    asm = Assembler(mesh, mats, threads=1, engine="compiled")
+    rng = np.random.default_rng(4)
+    u = 0.02 * rng.normal(size=mesh.n_dofs)
+    _, tangent_of, _ = asm.evaluate(u, asm.initial_state(), 0.1)
+    rows, cols, entries = asm.pattern()
+    raw = tangent_of(raw=True)
+    assert raw.size == entries.size
+    data = np.bincount(entries, weights=raw, minlength=rows.size)
+    free = np.setdiff1d(np.arange(mesh.n_dofs), mesh.fixed)
+    by_entries = TangentSystem(rows, cols, free, mesh.n_dofs, [], entries).values(raw, [])
+    by_pattern = TangentSystem(rows, cols, free, mesh.n_dofs, []).values(data, [])
+    assert np.array_equal(by_entries, by_pattern)
+    full = tangent_of(free).toarray()
+    lower = sp.csc_matrix((by_entries, *_lower_pattern(rows, cols, free, mesh.n_dofs)),
+                          shape=full.shape).toarray()
+    assert np.allclose(np.tril(full), lower, rtol=0, atol=1e-12 * np.abs(full).max())
+    for scale in (0.02, 3.0):  # none inverted; most inverted
+        v = scale * rng.normal(size=mesh.n_dofs)
+        with np.errstate(over="ignore", invalid="ignore"):
+            expect = int((~(np.linalg.det(asm.deformation_gradient(v)) > 0)).sum())
+        assert asm.inverted(v) == expect
+        assert (expect == 0) == (scale < 1)
+
+
+def _lower_pattern(rows, cols, free, n):
+    """CSC row indices and column pointers of the free-free lower triangle of a pattern."""
+    fmap = np.full(n, -1)
+    fmap[free] = np.arange(free.size)
+    r, c = fmap[rows], fmap[cols]
+    keep = (r >= 0) & (c >= 0) & (r >= c)
+    keys = np.unique(c[keep] * free.size + r[keep])
+    return keys % free.size, np.searchsorted(keys // free.size, np.arange(free.size + 1))

@@ -244,22 +244,39 @@ class Assembler:
         return (f, lambda free=None, raw=False: self._tangent_compiled(F, D, S, free, raw),
                 ElementState(new_groups))
 
-    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Row and column of each entry of the tangent's data (``tangent_of(raw=True)``)."""
+    def pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tangent's pattern, row and column of each stored value, and for each entry of
+        the compiled element tangents (``tangent_of(raw=True)``, compiled engine) the index
+        of the value it adds to (entries of one value are summed in their order; None on the
+        NumPy engine)."""
         rows = np.repeat(np.arange(self.mesh.n_dofs), np.diff(self._indptr))
-        return rows, self._cols.astype(np.int64)
+        entries = self._scatter_nijm.ravel() if self.engine == "compiled" else None
+        return rows, self._cols.astype(np.int64), entries
+
+    def inverted(self, u: np.ndarray) -> int:
+        """The number of Gauss points with det F <= 0 (or not finite) at ``u``."""
+        if self.engine == "compiled":
+            return self._kernels().inverted_points(np.ascontiguousarray(u, dtype=float),
+                                                   self.mesh.elements, self.mesh.dim,
+                                                   self.dNdX)
+        with np.errstate(over="ignore", invalid="ignore"):
+            detF = np.linalg.det(self.deformation_gradient(u))
+        return int((~(detF > 0)).sum())
 
     def _tangent_compiled(self, F: np.ndarray, D: np.ndarray, S: np.ndarray,
                           free: np.ndarray | None = None, raw: bool = False):
         """`_tangent` from the compiled element tangents (`kernels.element_tangents`);
-        ``raw``: the data of the whole pattern (`pattern`) instead of a matrix."""
+        ``raw``: those element tangents' entries, unassembled (`pattern` says where each
+        goes), instead of a matrix."""
         kernels = self._kernels()
         mesh, dim = self.mesh, self.mesh.dim
         ne, nn = mesh.elements.shape
         K = np.empty((ne, nn * dim * dim, nn))
         kernels.element_tangents(F, S, D, self.dNdX, self.wdet, self._G_qdm, K)
+        if raw:
+            return K.ravel()
         data = np.bincount(self._scatter_nijm.ravel(), weights=K.ravel(), minlength=self._nnz)
-        return data if raw else self._assembled(data, free)
+        return self._assembled(data, free)
 
     def _assembled(self, data: np.ndarray, free: np.ndarray | None) -> sp.spmatrix:
         """The tangent from its pattern's data: whole (CSR), or its free-free block (CSC)."""

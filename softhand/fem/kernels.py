@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["element_tangents", "evaluate_group", "sym_eig3"]
+__all__ = ["element_tangents", "evaluate_group", "inverted_points", "scatter_add", "sym_eig3"]
 
 _VOIGT_A = np.array([0, 1, 2, 0, 1, 0])
 _VOIGT_B = np.array([0, 1, 2, 1, 2, 2])
@@ -330,3 +330,40 @@ def element_tangents(F, S, D, dNdX, wdet, G_qdm, K):
         E = np.empty((nn * dim * dim, nq * dim))
         _tangent_factor(e, F, S, D, dNdX, wdet, E)
         K[e] = np.dot(E, G_qdm[e])
+
+
+@njit(cache=True)
+def scatter_add(out, index, values):
+    """``out[index[k]] += values[k]`` for every ``k`` with ``index[k] >= 0``, in the order of
+    ``k`` (one thread): the sums of ``np.bincount(index, weights=values)`` bit for bit, with
+    no array of the pattern's size in between."""
+    for k in range(index.size):
+        i = index[k]
+        if i >= 0:
+            out[i] += values[k]
+
+
+@njit(parallel=True, cache=True)
+def inverted_points(u, elements, dim, dNdX):
+    """The number of Gauss points with det F <= 0 (or not a number) at displacement ``u``:
+    the deformation gradient of `evaluate_group`, without the material."""
+    ne, nq, nn = dNdX.shape[0], dNdX.shape[1], dNdX.shape[2]
+    bad = np.zeros(ne, dtype=np.int64)
+    for e in prange(ne):
+        F = np.empty((3, 3))
+        for q in range(nq):
+            for i in range(3):
+                for j in range(3):
+                    F[i, j] = 1.0 if i == j else 0.0
+            for n in range(nn):
+                node = elements[e, n]
+                for i in range(dim):
+                    ui = u[node * dim + i]
+                    for j in range(dim):
+                        F[i, j] += ui * dNdX[e, q, n, j]
+            det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
+                   - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
+                   + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+            if not det > 0.0:
+                bad[e] += 1
+    return int(bad.sum())

@@ -78,10 +78,13 @@ class TangentSystem:
         contacts: one template gap matrix per contact set (CSR, points x dofs); each later
             gap matrix of that set must have the same structure (the same rows and columns,
             values free).
+        entries: for each entry of the element data `values` takes, the index of the
+            pattern's value (``rows``, ``cols``) it adds to (the compiled element tangents,
+            `Assembler.pattern`); None: the element data are the pattern's values themselves.
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, free: np.ndarray, n_dofs: int,
-                 contacts: list[sp.csr_matrix]) -> None:
+                 contacts: list[sp.csr_matrix], entries: np.ndarray | None = None) -> None:
         from cvxopt import cholmod, matrix, spmatrix
 
         self._cholmod, self._matrix, self._spmatrix = cholmod, matrix, spmatrix
@@ -92,6 +95,9 @@ class TangentSystem:
         r, c = fmap[rows], fmap[cols]
         keep = (r >= 0) & (c >= 0) & (r >= c)
         self._src = np.flatnonzero(keep)
+        self._n_pattern = rows.size
+        self._entries = (np.arange(rows.size) if entries is None
+                         else np.asarray(entries, dtype=np.int64))
         self._element_keys = c[keep] * n + r[keep]  # column-major: CSC order of the lower part
         self._contacts = [_point_pairs(G, fmap) for G in contacts]
         self._contact_nnz = [G.nnz for G in contacts]
@@ -113,7 +119,9 @@ class TangentSystem:
                               + [k[sel] for k, sel in zip(self._pair_keys, chosen, strict=True)])
         ukeys, inv = np.unique(keys, return_inverse=True)
         self.nnz = ukeys.size
-        self._dst = inv[:self._element_keys.size]
+        to_vals = np.full(self._n_pattern, -1, dtype=np.int64)  # pattern value -> lower value
+        to_vals[self._src] = inv[:self._element_keys.size]
+        self._entry_dst = to_vals[self._entries]
         self._contact_dst = []
         start = self._element_keys.size
         for sel in chosen:
@@ -135,10 +143,16 @@ class TangentSystem:
 
     def values(self, element_data: np.ndarray,
                contacts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-        """The lower triangle's values: the elements' tangent data plus, per contact set,
+        """The lower triangle's values: the elements' tangent data (``entries`` of the
+        constructor), summed straight into it, plus, per contact set,
         ``(kw, G_data)``: each point's penalty stiffness ``eps * w * [g < 0]`` and its gap
         matrix's values (in the template's structure). A closed point the pattern does not
         hold yet is added to it first (a new symbolic analysis)."""
+        from softhand.fem.kernels import scatter_add
+
+        if element_data.size != self._entries.size:
+            raise ValueError(f"element data has {element_data.size} entries, the pattern's "
+                             f"map {self._entries.size}")
         closed = [np.flatnonzero(kw) for kw, _ in contacts]
         new = False
         for active, idx in zip(self._active, closed, strict=True):
@@ -148,7 +162,7 @@ class TangentSystem:
         if new:
             self._analyse()
         vals = np.zeros(self.nnz)
-        vals[self._dst] = element_data[self._src]
+        scatter_add(vals, self._entry_dst, np.ascontiguousarray(element_data, dtype=float))
         for (pt, ia, ib, _, _, ptr), dst, nnz, (kw, gdata), idx in zip(
                 self._contacts, self._contact_dst, self._contact_nnz, contacts, closed,
                 strict=True):

@@ -409,9 +409,7 @@ class _Model:
             for _ in range(6):  # backtrack only if the update inverts an element
                 trial = u.copy()
                 trial[self.free] += step * du
-                with np.errstate(over="ignore", invalid="ignore"):
-                    detF = np.linalg.det(self.asm.deformation_gradient(trial))
-                if np.all(detF > 0):
+                if self.asm.inverted(trial) == 0:
                     break
                 step *= 0.5
             u = trial
@@ -425,8 +423,9 @@ class _Model:
             template = (self.plate.G if self.plate is not None
                         else self.round.linearised(np.zeros(self.mesh.n_dofs), 0.0).G)
             contacts = [template] + ([self.pocket.G] if self.pocket is not None else [])
-            rows, cols = self.asm.pattern()
-            self._system = TangentSystem(rows, cols, self.free, self.mesh.n_dofs, contacts)
+            rows, cols, entries = self.asm.pattern()
+            self._system = TangentSystem(rows, cols, self.free, self.mesh.n_dofs, contacts,
+                                         entries)
         return self._system
 
 
