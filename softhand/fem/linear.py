@@ -102,9 +102,10 @@ class TangentSystem:
         self._contacts = [_point_pairs(G, fmap) for G in contacts]
         self._contact_nnz = [G.nnz for G in contacts]
         self._pair_keys = [p[4] * n + p[3] for p in self._contacts]
-        elements = np.unique(self._element_keys)
+        self._key_order = np.argsort(self._element_keys)  # the element keys are distinct
+        self._sorted_keys = self._element_keys[self._key_order]
         #: per contact set, the points the pattern holds
-        self._active = [np.full(G.shape[0], bool(np.isin(k, elements).all()))
+        self._active = [np.full(G.shape[0], bool(self._in_elements(k).all()))
                         for G, k in zip(contacts, self._pair_keys, strict=True)]
         self.stats = {"cholesky": 0, "superlu": 0, "analyses": 0}
         cholmod.options["supernodal"] = 2
@@ -115,20 +116,24 @@ class TangentSystem:
         Cholesky factorization."""
         n = self.n
         chosen = [active[p[0]] for active, p in zip(self._active, self._contacts, strict=True)]
-        keys = np.concatenate([self._element_keys]
-                              + [k[sel] for k, sel in zip(self._pair_keys, chosen, strict=True)])
-        ukeys, inv = np.unique(keys, return_inverse=True)
+        picked = [k[sel] for k, sel in zip(self._pair_keys, chosen, strict=True)]
+        # the sorted union of the element keys (sorted once) and the contact keys they lack
+        extra = np.concatenate([np.zeros(0, dtype=np.int64)] + picked)
+        extra = np.unique(extra[~self._in_elements(extra)])
+        ukeys = np.insert(self._sorted_keys,
+                          np.searchsorted(self._sorted_keys, extra), extra)
         self.nnz = ukeys.size
+        inv = np.empty(self._element_keys.size, dtype=np.int64)
+        inv[self._key_order] = (np.arange(self._sorted_keys.size)
+                                + np.searchsorted(extra, self._sorted_keys))
         to_vals = np.full(self._n_pattern, -1, dtype=np.int64)  # pattern value -> lower value
-        to_vals[self._src] = inv[:self._element_keys.size]
+        to_vals[self._src] = inv
         self._entry_dst = to_vals[self._entries]
         self._contact_dst = []
-        start = self._element_keys.size
-        for sel in chosen:
+        for sel, keys in zip(chosen, picked, strict=True):
             dst = np.full(sel.size, -1, dtype=np.int64)
-            dst[sel] = inv[start:start + int(sel.sum())]
+            dst[sel] = np.searchsorted(ukeys, keys)
             self._contact_dst.append(dst)
-            start += int(sel.sum())
         self._rows = (ukeys % n).astype(np.int64)
         self._cols = (ukeys // n).astype(np.int64)
         self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
@@ -140,6 +145,11 @@ class TangentSystem:
         self._A = A
         self._symbolic = self._cholmod.symbolic(A, uplo="L")
         self.stats["analyses"] += 1
+
+    def _in_elements(self, keys: np.ndarray) -> np.ndarray:
+        """Which of ``keys`` the elements' lower triangle holds."""
+        at = np.minimum(np.searchsorted(self._sorted_keys, keys), self._sorted_keys.size - 1)
+        return self._sorted_keys[at] == keys
 
     def values(self, element_data: np.ndarray,
                contacts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
