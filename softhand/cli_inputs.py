@@ -202,6 +202,14 @@ _OPT_ENGINE = click.option(
          "reference). The same curves within the Newton tolerance; numpy is about 2x slower.")
 
 
+_OPT_SOLVER = click.option(
+    "--solver", type=click.Choice(["auto", "cholmod", "pardiso"]), default="auto",
+    show_default=True,
+    help="Sparse Cholesky of the compiled engine: MKL PARDISO (pip install 'softhand[mkl]'; "
+         "x86-64 Linux and Windows), CHOLMOD, or auto (PARDISO where installed). The same "
+         "curves to rounding; bench fe times both.")
+
+
 def cpus_allowed(ctx, param, value):
     """--threads / --workers: at most the CPUs this process may run on (more only queue)."""
     from softhand.parallel import available_cpus
@@ -250,7 +258,7 @@ def check_threads_or_cluster(threads: int | None, cluster: str | None,
 
 FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_BODY, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
               _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS,
-              _OPT_ENGINE)
+              _OPT_ENGINE, _OPT_SOLVER)
 EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,
                   _OPT_FORCE, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 
@@ -325,6 +333,8 @@ def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **
     try:
         settings = IndentationSettings(mode=mode, **kw)
     except ValueError as exc:  # the option types already checked each number
+        if str(exc).startswith("solver = "):
+            bad(f"--solver {kw['solver']}: {str(exc).split(': ', 1)[-1]}")
         bad(f"--body {kw['body']}: {exc}" if str(exc).startswith("indenter = ") and
             kw.get("body", "phalanx") != "phalanx" else str(exc))
     materials = load_materials(materials_path)

@@ -278,3 +278,12 @@ def test_fe_curve_cut_at_a_row_boundary_is_caught_by_its_recorded_hash(tmp_path)
 ])
 def test_indenters(args, needles):
     rejected(args, *needles)
+
+
+def test_a_solver_that_is_not_installed_is_refused_naming_the_flag(monkeypatch):
+    import softhand.fem.linear
+
+    monkeypatch.setattr(softhand.fem.linear, "pardiso_available", lambda: False)
+    for command in (["fe", "indent", "solid-pu"], ["fe", "sweep", "--design", "solid-pu"]):
+        rejected([*command, *FAST, "--solver", "pardiso"], "--solver pardiso",
+                 "MKL PARDISO is not installed", "softhand[mkl]", "allowed here: auto, cholmod")

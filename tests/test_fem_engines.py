@@ -12,7 +12,7 @@ import scipy.sparse.linalg as spla
 from softhand.fem.assembly import Assembler
 from softhand.fem.geometry import parse_design
 from softhand.fem.kernels import sym_eig3
-from softhand.fem.linear import TangentSystem
+from softhand.fem.linear import TangentSystem, pardiso_available
 from softhand.fem.materials import material
 from softhand.fem.mesh import build_mesh
 from softhand.fem.solver import IndentationSettings, indent
@@ -81,7 +81,13 @@ def test_jacobi_eigenpairs_reconstruct_the_matrix(kind):
     assert np.allclose(np.sort(w), np.sort(lam), rtol=1e-13)
 
 
-def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite():
+needs_pardiso = pytest.mark.skipif(not pardiso_available(),
+                                   reason="MKL PARDISO is not installed (extra softhand[mkl])")
+SOLVER_CASES = ["cholmod", pytest.param("pardiso", marks=needs_pardiso)]
+
+
+@pytest.mark.parametrize("solver", SOLVER_CASES)
+def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite(solver):
     rng = np.random.default_rng(2)
     n = 60
     B = sp.random(n, n, density=0.08, random_state=3, format="csr")
@@ -90,7 +96,8 @@ def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite():
     G = sp.csr_matrix((rng.normal(size=8), (np.arange(4).repeat(2), rng.integers(0, n, 8))),
                       shape=(4, n))
     free = np.arange(n)
-    system = TangentSystem(rows, cols, free, n, [G])
+    system = TangentSystem(rows, cols, free, n, [G], solver=solver)
+    assert system.solver == solver
     data = np.asarray(K[rows, cols]).ravel()
     kw = np.array([2.0, 0.0, 3.0, 0.0])
     vals = system.values(data, [(kw, G.data)])
@@ -98,24 +105,44 @@ def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite():
     full = K + G.T @ sp.diags(kw) @ G
     x = system.factorize(vals)(b)
     assert np.allclose(x, spla.spsolve(full.tocsc(), b), rtol=1e-10, atol=1e-12)
-    assert system.stats == {"cholesky": 1, "superlu": 0, "analyses": 2}
+    assert system.stats == {"cholesky": 1, "indefinite": 0, "superlu": 0, "analyses": 2}
     # an indefinite tangent (a negative pivot) is solved by LU instead
     shifted = K - sp.identity(n) * (0.5 + 2.0 * spla.eigsh(B @ B.T, 1, which="SA")[0][0] + 1.0)
     data = np.asarray(shifted.tocsr()[rows, cols]).ravel()
     x = system.factorize(system.values(data, [(np.zeros(4), G.data)]))(b)
     assert np.allclose(shifted @ x, b, atol=1e-8)
-    assert system.stats["superlu"] == 1
+    # CHOLMOD hands it to SuperLU, PARDISO to its own symmetric indefinite factorization
+    fallback = "superlu" if solver == "cholmod" else "indefinite"
+    assert system.stats[fallback] == 1 and system.stats["cholesky"] == 1
+    system.close()
 
 
+def test_the_solver_is_checked_before_any_work(monkeypatch):
+    import softhand.fem.linear as linear
+
+    with pytest.raises(ValueError, match="solver = 'lu': allowed auto, cholmod, pardiso"):
+        IndentationSettings(solver="lu")
+    monkeypatch.setattr(linear, "pardiso_available", lambda: False)
+    with pytest.raises(ValueError, match=r"solver = 'pardiso': MKL PARDISO is not installed"):
+        IndentationSettings(solver="pardiso")
+    assert linear.resolve_solver("auto") == "cholmod"
+
+
+@pytest.mark.parametrize("solver", SOLVER_CASES)
 @pytest.mark.parametrize(("design", "indenter"), [("pocket2-sil", "plate"),
                                                   ("pocket1-pu-sil", "plate"),
                                                   ("solid-sil", "cylinder:9@0")])
-def test_compiled_curves_equal_the_reference_within_the_newton_tolerance(design, indenter):
-    """Whole 2D runs, ramp and hold: the same steps, iterations and forces."""
+def test_compiled_curves_equal_the_reference_within_the_newton_tolerance(design, indenter,
+                                                                         solver):
+    """Whole 2D runs, ramp and hold: the same steps, iterations and forces, on each sparse
+    solver."""
     runs = {e: indent(design, IndentationSettings(mode="2d", hold_s=2.0, indenter=indenter,
-                                                  engine=e, threads=1))
+                                                  engine=e, threads=1, solver=solver))
             for e in ("numpy", "compiled")}
     ref, new = runs["numpy"], runs["compiled"]
+    assert (ref.linear_solver, new.linear_solver) == ("superlu", solver)
+    assert new.summary()["linear_solver"] == solver
+    assert [r["iterations"] for r in new.log] == [r["iterations"] for r in ref.log]
     assert new.time_s.shape == ref.time_s.shape
     tol = IndentationSettings().tol_N + IndentationSettings().tol_rel * np.abs(ref.force_N)
     assert np.all(np.abs(new.force_N - ref.force_N) <= tol)
@@ -169,3 +196,27 @@ def _lower_pattern(rows, cols, free, n):
     keep = (r >= 0) & (c >= 0) & (r >= c)
     keys = np.unique(c[keep] * free.size + r[keep])
     return keys % free.size, np.searchsorted(keys // free.size, np.arange(free.size + 1))
+
+
+@needs_pardiso
+def test_pardiso_and_cholmod_give_the_same_3d_curve_through_indefinite_tangents(monkeypatch):
+    """pocket2-sil (3D, coarse) meets tangents that are not positive definite as the pocket's
+    roof gives way: PARDISO's indefinite factorization takes them where CHOLMOD hands them to
+    SuperLU, and the curves agree to rounding with the same Newton iterations."""
+    import softhand.fem.linear as linear
+
+    calls = {"indefinite": 0}
+    original = linear._Pardiso.factorize_indefinite
+
+    def counted(self, vals):
+        calls["indefinite"] += 1
+        return original(self, vals)
+
+    monkeypatch.setattr(linear._Pardiso, "factorize_indefinite", counted)
+    runs = {s: indent("pocket2-sil", IndentationSettings(mesh="coarse", hold_s=0, solver=s))
+            for s in ("cholmod", "pardiso")}
+    a, b = runs["cholmod"], runs["pardiso"]
+    assert calls["indefinite"] >= 1
+    assert [r["iterations"] for r in a.log] == [r["iterations"] for r in b.log]
+    assert np.allclose(a.force_N, b.force_N, rtol=0, atol=1e-9)
+    assert np.allclose(a.displacement_mm, b.displacement_mm, rtol=0, atol=1e-9)

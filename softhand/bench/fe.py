@@ -2,12 +2,14 @@
 
 Measures, in one process on this machine:
 
-* the two element engines side by side (``IndentationSettings.engine``): the NumPy reference
+* the element engines side by side (``IndentationSettings.engine``): the NumPy reference
   (batched NumPy elements, SuperLU ordering and factorizing every tangent) against the compiled
-  engine (numba kernels, CHOLMOD on the run's fixed pattern), on one 3D design to 2 N, runs
-  interleaved (reference, compiled, reference, ...) so that a drift of the machine hits both;
-  with the Newton iterations and the largest difference between their force curves;
-* one 3D design to 2 N at the default mesh (ramp only), and the same with the 10 s hold;
+  engine (numba kernels, the run's fixed pattern) on each sparse Cholesky installed here
+  (CHOLMOD; MKL PARDISO with the ``softhand[mkl]`` extra), on one 3D design to 2 N, runs
+  interleaved (reference, CHOLMOD, PARDISO, reference, ...) so that a drift of the machine hits
+  all; with the Newton iterations and the largest difference between their force curves;
+* at the default settings (the compiled engine, PARDISO where installed): one 3D design to
+  2 N at the default mesh (ramp only), and the same with the 10 s hold;
 * the same ramp with every core of the machine busy with other work (an external CPU load of one
   busy process per core, started and stopped by the benchmark), at the default ``--threads`` and
   at one thread: the slow-down should be about the fair share (2x with as many busy processes as
@@ -34,6 +36,7 @@ from typing import Any
 
 from softhand.bench.common import machine_info, machine_line
 from softhand.fem.geometry import DESIGNS
+from softhand.fem.linear import resolve_solver
 from softhand.fem.solver import IndentationSettings, indent
 from softhand.fem.sweep import compare_with_paper, run_sweep
 from softhand.io import atomic_write_json, atomic_write_text
@@ -88,6 +91,7 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False,
     machine = machine_info()
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
     data["engines"] = _engines(repeats=2 if quick else 3, say=say)
+    data["solver"] = resolve_solver("auto")  # the default runs below go to it
     say("one 3D design (pocket2-sil) to 2 N, ramp")
     one = indent("pocket2-sil", ramp)
     say("one 3D design (pocket2-sil) to 2 N, ramp + 10 s hold")
@@ -162,56 +166,67 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False,
     return md
 
 
+#: The engines the benchmark compares: (key, engine, sparse solver, label).
+_ENGINE_RUNS = (("numpy", "numpy", "auto", "reference (NumPy elements, SuperLU)"),
+                ("cholmod", "compiled", "cholmod", "compiled (numba elements, CHOLMOD)"),
+                ("pardiso", "compiled", "pardiso", "compiled (numba elements, MKL PARDISO)"))
+
+
 def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
-    """Reference and compiled engine on pocket2-sil, 3D default mesh, ramp to 2 N and the
-    ramp with the 10 s hold, interleaved ``repeats`` times; median walls. ``say`` gets a line
-    before each run."""
+    """The reference engine and the compiled one on each sparse solver installed here, on
+    pocket2-sil, 3D default mesh, ramp to 2 N and the ramp with the 10 s hold, interleaved
+    ``repeats`` times; median walls. ``say`` gets a line before each run."""
+    from softhand.fem.linear import pardiso_available
+
+    runs_of = [r for r in _ENGINE_RUNS if r[0] != "pardiso" or pardiso_available()]
     out: dict[str, Any] = {"design": "pocket2-sil", "repeats": repeats,
-                           "threads": default_threads()}
+                           "threads": default_threads(),
+                           "labels": {key: label for key, _, _, label in runs_of}}
     for label, hold in (("ramp", 0.0), ("ramp_hold", 10.0)):
-        walls: dict[str, list[float]] = {"numpy": [], "compiled": []}
+        walls: dict[str, list[float]] = {key: [] for key, *_ in runs_of}
         last: dict[str, Any] = {}
         runs = repeats if label == "ramp" else 1
         for i in range(runs):
-            for engine in ("numpy", "compiled"):
+            for key, engine, solver, _ in runs_of:
                 say(f"engines on pocket2-sil, {label.replace('_', ' + ')} {i + 1} of {runs}: "
-                    f"{engine}")
-                r = indent("pocket2-sil", IndentationSettings(hold_s=hold, engine=engine))
-                walls[engine].append(r.wall_s)
-                last[engine] = r
-        ref, new = last["numpy"], last["compiled"]
-        same_points = ref.force_N.shape == new.force_N.shape
-        out[label] = {
-            engine: {"wall_s": statistics.median(w), "walls_s": w,
-                     "newton_iterations": int(sum(x["iterations"] for x in last[engine].log)),
-                     "steps": len(last[engine].log),
-                     "d2N_mm": last[engine].displacement_at(2.0)}
-            for engine, w in walls.items()}
-        out[label]["speedup"] = (out[label]["numpy"]["wall_s"]
-                                 / out[label]["compiled"]["wall_s"])
-        out[label]["max_force_difference_N"] = (
-            float(abs(ref.force_N - new.force_N).max()) if same_points else None)
-        out[label]["same_steps"] = same_points
+                    f"{key}")
+                r = indent("pocket2-sil", IndentationSettings(hold_s=hold, engine=engine,
+                                                              solver=solver))
+                walls[key].append(r.wall_s)
+                last[key] = r
+        ref = last["numpy"]
+        out[label] = {}
+        for key, w in walls.items():
+            new = last[key]
+            same_points = ref.force_N.shape == new.force_N.shape
+            out[label][key] = {
+                "wall_s": statistics.median(w), "walls_s": w,
+                "speedup": statistics.median(walls["numpy"]) / statistics.median(w),
+                "newton_iterations": int(sum(x["iterations"] for x in new.log)),
+                "steps": len(new.log), "d2N_mm": new.displacement_at(2.0),
+                "max_force_difference_N": (float(abs(ref.force_N - new.force_N).max())
+                                           if same_points else None)}
     return out
 
 
 def _engine_lines(d: dict[str, Any]) -> list[str]:
     e = d.get("engines")
-    if not e:
+    if not e or "labels" not in e:
         return []
-    lines = [f"The two element engines on {e['design']} (3D, default mesh, "
-             f"{e['threads']} threads), interleaved, median of {e['repeats']} ramps "
-             "(the ramp with the hold: one run each):", "",
-             "| run | reference (NumPy, SuperLU) s | compiled (numba, CHOLMOD) s | speed-up "
-             "| Newton iterations (ref / compiled) | largest force difference (N) |",
+    lines = [f"The engines on {e['design']} (3D, default mesh, {e['threads']} threads), "
+             f"interleaved, median of {e['repeats']} ramps (the ramp with the hold: one run "
+             "each); the compiled engine on each sparse solver installed here:", "",
+             "| run | engine | wall (s) | speed-up | Newton iterations "
+             "| largest force difference from the reference (N) |",
              "|---|---|---|---|---|---|"]
     for label, name in (("ramp", "ramp to 2 N"), ("ramp_hold", "ramp + 10 s hold")):
-        r = e[label]
-        diff = r["max_force_difference_N"]
-        lines.append(f"| {name} | {r['numpy']['wall_s']:.1f} | {r['compiled']['wall_s']:.1f} | "
-                     f"{r['speedup']:.2f}x | {r['numpy']['newton_iterations']} / "
-                     f"{r['compiled']['newton_iterations']} | "
-                     f"{'different steps' if diff is None else format(diff, '.1e')} |")
+        for key, r in e[label].items():
+            diff = r["max_force_difference_N"]
+            lines.append(f"| {name} | {e['labels'][key]} | {r['wall_s']:.1f} | "
+                         f"{r['speedup']:.2f}x | {r['newton_iterations']} | "
+                         + ("reference" if key == "numpy" else
+                            "different steps" if diff is None else format(diff, ".1e"))
+                         + " |")
     return lines
 
 
@@ -223,7 +238,7 @@ def _markdown(d: dict[str, Any]) -> str:
         "# FE benchmark (`softhand bench fe`)", "",
         machine_line({"git_revision": d["git_revision"], **d["machine"]}), "",
         *_engine_lines(d), "",
-        "| what (compiled engine) | wall (s) |", "|---|---|",
+        f"| what (compiled engine, {d.get('solver', 'cholmod')}) | wall (s) |", "|---|---|",
         f"| one 3D design (pocket2-sil) to 2 N, default mesh | {d['one_design']['ramp_wall_s']:.1f} |",
         f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",
         f"| 12-design sweep, 3D, ramp + hold | {d['sweep_3d']['wall_s']:.1f} |",

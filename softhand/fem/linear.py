@@ -1,34 +1,205 @@
-"""The Newton tangent of one run in one fixed sparse pattern, factorized by CHOLMOD.
+"""The Newton tangent of one run in one fixed sparse pattern, factorized by sparse Cholesky.
 
 Every tangent of a run is the free-free block of the elements' stiffness plus the penalty
 stiffness of the contact points that are closed, `G^T \\operatorname{diag}(\\varepsilon w
 [g<0])\\, G` (`softhand.fem.contact`). So every tangent's pattern lies in one union known
 before the first step: the elements' pattern and, for each contact set, the couplings of each
 point's degrees of freedom. `TangentSystem` builds that union's lower triangle once,
-analyses it once (CHOLMOD's symbolic factorization: fill-reducing ordering and supernodes), and
-then each Newton iteration only scatters numbers into it and runs the numeric supernodal
-Cholesky factorization (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; CHOLMOD as
-shipped in CVXOPT).
+analyses it once (the symbolic factorization: fill-reducing ordering and supernodes), and
+then each Newton iteration only scatters numbers into it and runs the numeric factorization.
 
-Why CHOLMOD through CVXOPT: the tangent is symmetric, and positive definite at every iterate
-the solver has met, so Cholesky serves; CVXOPT ships CHOLMOD in binary wheels for Linux, macOS
-and Windows (no compiler, no SuiteSparse headers), and separates the symbolic analysis from the
-numeric factorization, which is what a fixed pattern needs. Measured on the 3D tangents of
-``pocket2-sil`` (4.9k free dofs): the numeric factorization takes about 0.6x SuperLU's time.
+Two factorizations serve, the same arithmetic to rounding (``softhand bench fe`` times both):
 
-A tangent that is not positive definite (CHOLMOD reports it) is solved by SuperLU in symmetric
-mode, as the NumPy reference engine solves every tangent.
+- MKL PARDISO (Schenk and Gaertner, Future Generation Computer Systems 20, 2004; as shipped in
+  Intel's MKL wheels, loaded by pypardiso; the ``softhand[mkl]`` extra, x86-64 Linux and
+  Windows): nested-dissection ordering (METIS) and threaded supernodal factorization. Chosen
+  where it is installed: on the 3D tangents of ``pocket2-sil`` (4.9k free dofs) its numeric
+  factorization took a third of CHOLMOD's time on one thread.
+- CHOLMOD (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; as shipped in CVXOPT's
+  binary wheels for Linux, macOS and Windows: no compiler, no SuiteSparse headers): everywhere
+  else. Its numeric factorization takes about 0.6x SuperLU's time.
+
+Not in the default install because MKL's wheel is 230 MB (690 MB installed), which a user of the
+handshake alone does not need.
+
+The tangent is symmetric and almost always positive definite. One that is not (the
+factorization reports it; a few iterations of a run as a pocket's roof buckles) is solved by
+PARDISO's symmetric indefinite factorization, or without PARDISO by SuperLU in symmetric mode,
+as the NumPy reference engine solves every tangent.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["TangentSystem"]
+__all__ = ["SOLVERS", "TangentSystem", "pardiso_available", "resolve_solver"]
+
+#: The sparse Cholesky behind `TangentSystem`: ``"auto"`` (PARDISO where it is installed, else
+#: CHOLMOD), ``"cholmod"`` or ``"pardiso"``.
+SOLVERS = ("auto", "cholmod", "pardiso")
+
+
+def pardiso_available() -> bool:
+    """Whether MKL PARDISO loads here (the ``softhand[mkl]`` extra: pypardiso and MKL)."""
+    try:
+        _Pardiso.library()
+    except (ImportError, OSError):
+        return False
+    return True
+
+
+def resolve_solver(solver: str) -> str:
+    """The solver ``solver`` names, ``"auto"`` resolved.
+
+    Raises:
+        ValueError: an unknown name, or ``"pardiso"`` where it is not installed.
+    """
+    if solver not in SOLVERS:
+        raise ValueError(f"solver = {solver!r}: allowed {', '.join(SOLVERS)}")
+    if solver == "auto":
+        return "pardiso" if pardiso_available() else "cholmod"
+    if solver == "pardiso" and not pardiso_available():
+        raise ValueError("solver = 'pardiso': MKL PARDISO is not installed here (install the "
+                         "extra: pip install 'softhand[mkl]'; x86-64 Linux and Windows); "
+                         "allowed here: auto, cholmod")
+    return solver
+
+
+class _NotPositiveDefiniteError(ArithmeticError):
+    """The factorization met a pivot that is not positive."""
+
+
+class _Cholmod:
+    """CHOLMOD's supernodal Cholesky (CVXOPT) on the lower triangle in CSC."""
+
+    name = "cholmod"
+
+    def __init__(self, threads: int) -> None:
+        from cvxopt import cholmod, matrix, spmatrix
+
+        self._cholmod, self._matrix, self._spmatrix = cholmod, matrix, spmatrix
+        cholmod.options["supernodal"] = 2
+
+    def analyse(self, n: int, rows: np.ndarray, cols: np.ndarray, indptr: np.ndarray) -> None:
+        probe = np.arange(rows.size, dtype=float) + 1.0
+        matrix = self._matrix
+        A = self._spmatrix(matrix(probe), matrix(rows), matrix(cols), (n, n))
+        if not np.array_equal(np.asarray(A.V).ravel(), probe):  # CVXOPT keeps CSC order
+            raise RuntimeError("CHOLMOD matrix does not keep the pattern's order")
+        self._A = A
+        self._symbolic = self._cholmod.symbolic(A, uplo="L")
+
+    def factorize(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        self._A.V = self._matrix(vals)  # A.V is a copy on reading: assign the whole
+        try:
+            self._cholmod.numeric(self._A, self._symbolic)
+        except ArithmeticError as exc:
+            raise _NotPositiveDefiniteError(str(exc)) from exc
+        F, cholmod, matrix = self._symbolic, self._cholmod, self._matrix
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            x = matrix(np.ascontiguousarray(b, dtype=float))
+            cholmod.solve(F, x)
+            return np.asarray(x).ravel()
+
+        return solve
+
+    def close(self) -> None:
+        pass
+
+
+class _Pardiso:
+    """MKL PARDISO, called through ctypes on the library pypardiso loads, with MKL's default
+    parameters (METIS nested-dissection ordering, one-based indices): real symmetric positive
+    definite (``mtype = 2``), and for a tangent that is not, real symmetric indefinite
+    (``mtype = -2``: Bunch-Kaufman pivoting, small pivots perturbed and the solution refined).
+    The lower triangle in CSC is the upper triangle in CSR, the layout PARDISO takes, so the
+    pattern's arrays serve as they are. Its threads are set for each call
+    (``mkl_set_num_threads_local``) and put back after it."""
+
+    name = "pardiso"
+
+    @staticmethod
+    @functools.cache
+    def library():
+        from pypardiso.pardiso_wrapper import PyPardisoSolver
+
+        loader = PyPardisoSolver(mtype=2)  # finds mkl_rt and declares pardiso's signature
+        return loader.libmkl, loader._mkl_pardiso
+
+    def __init__(self, threads: int) -> None:
+        import ctypes
+
+        self._ct = ctypes
+        self._lib, self._call = self.library()
+        self._threads = threads
+        #: per matrix type, PARDISO's handle (its internal pointers) once analysed
+        self._handles: dict[int, np.ndarray] = {}
+        self._iparm = {2: np.zeros(64, dtype=np.int32), -2: np.zeros(64, dtype=np.int32)}
+
+    def _run(self, mtype: int, phase: int, vals: np.ndarray,
+             b: np.ndarray | None = None) -> np.ndarray:
+        ct = self._ct
+        i32, f64 = ct.POINTER(ct.c_int32), ct.POINTER(ct.c_double)
+        rhs = np.zeros(self._n) if b is None else np.ascontiguousarray(b, dtype=float)
+        x = np.zeros(self._n)
+        err = ct.c_int32(0)
+        pt = self._handles.setdefault(mtype, np.zeros(64, dtype=np.int64))
+        before = self._lib.MKL_Set_Num_Threads_Local(self._threads)
+        try:
+            self._call(pt.ctypes.data_as(ct.POINTER(ct.c_int64)),
+                       ct.byref(ct.c_int32(1)), ct.byref(ct.c_int32(1)),
+                       ct.byref(ct.c_int32(mtype)), ct.byref(ct.c_int32(phase)),
+                       ct.byref(ct.c_int32(self._n)), vals.ctypes.data_as(f64),
+                       self._ia.ctypes.data_as(i32), self._ja.ctypes.data_as(i32),
+                       self._perm.ctypes.data_as(i32), ct.byref(ct.c_int32(1)),
+                       self._iparm[mtype].ctypes.data_as(i32), ct.byref(ct.c_int32(0)),
+                       rhs.ctypes.data_as(f64), x.ctypes.data_as(f64), ct.byref(err))
+        finally:
+            self._lib.MKL_Set_Num_Threads_Local(before)
+        if err.value == -4 and phase == 22 and mtype == 2:
+            raise _NotPositiveDefiniteError("PARDISO: zero or negative pivot")
+        if err.value != 0:
+            raise RuntimeError(f"PARDISO (mtype {mtype}) phase {phase} failed with error "
+                               f"{err.value}")
+        return x
+
+    def analyse(self, n: int, rows: np.ndarray, cols: np.ndarray, indptr: np.ndarray) -> None:
+        self.close()
+        self._n = n
+        self._ia = (indptr + 1).astype(np.int32)
+        self._ja = (rows + 1).astype(np.int32)
+        self._perm = np.zeros(n, dtype=np.int32)
+        self._vals = np.ones(rows.size)
+        self._run(2, 11, self._vals)
+
+    def _factorize(self, mtype: int, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        if mtype not in self._handles:  # the indefinite type's analysis, on first use
+            self._run(mtype, 11, self._vals)
+        self._vals = np.ascontiguousarray(vals, dtype=float)  # PARDISO keeps a pointer to it
+        self._run(mtype, 22, self._vals)
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            return self._run(mtype, 33, self._vals, b)
+
+        return solve
+
+    def factorize(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        return self._factorize(2, vals)
+
+    def factorize_indefinite(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        return self._factorize(-2, vals)
+
+    def close(self) -> None:
+        """Free PARDISO's memory (phase -1)."""
+        for mtype in list(self._handles):
+            self._run(mtype, -1, self._vals)
+            del self._handles[mtype]
 
 
 def _point_pairs(G: sp.csr_matrix, fmap: np.ndarray):
@@ -81,13 +252,15 @@ class TangentSystem:
         entries: for each entry of the element data `values` takes, the index of the
             pattern's value (``rows``, ``cols``) it adds to (the compiled element tangents,
             `Assembler.pattern`); None: the element data are the pattern's values themselves.
+        solver: one of `SOLVERS`.
+        threads: the sparse Cholesky's threads (PARDISO's; CHOLMOD here runs on one).
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, free: np.ndarray, n_dofs: int,
-                 contacts: list[sp.csr_matrix], entries: np.ndarray | None = None) -> None:
-        from cvxopt import cholmod, matrix, spmatrix
-
-        self._cholmod, self._matrix, self._spmatrix = cholmod, matrix, spmatrix
+                 contacts: list[sp.csr_matrix], entries: np.ndarray | None = None,
+                 solver: str = "auto", threads: int = 1) -> None:
+        self.solver = resolve_solver(solver)
+        self._backend = (_Pardiso if self.solver == "pardiso" else _Cholmod)(threads)
         fmap = np.full(n_dofs, -1, dtype=np.int64)
         fmap[free] = np.arange(free.size)
         n = free.size
@@ -107,8 +280,9 @@ class TangentSystem:
         #: per contact set, the points the pattern holds
         self._active = [np.full(G.shape[0], bool(self._in_elements(k).all()))
                         for G, k in zip(contacts, self._pair_keys, strict=True)]
-        self.stats = {"cholesky": 0, "superlu": 0, "analyses": 0}
-        cholmod.options["supernodal"] = 2
+        #: factorizations: Cholesky, PARDISO's symmetric indefinite LDL^T, SuperLU's LU; and
+        #: symbolic analyses of the pattern
+        self.stats = {"cholesky": 0, "indefinite": 0, "superlu": 0, "analyses": 0}
         self._analyse()
 
     def _analyse(self) -> None:
@@ -137,13 +311,7 @@ class TangentSystem:
         self._rows = (ukeys % n).astype(np.int64)
         self._cols = (ukeys // n).astype(np.int64)
         self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
-        probe = np.arange(self.nnz, dtype=float) + 1.0
-        matrix = self._matrix
-        A = self._spmatrix(matrix(probe), matrix(self._rows), matrix(self._cols), (n, n))
-        if not np.array_equal(np.asarray(A.V).ravel(), probe):  # CVXOPT keeps CSC order
-            raise RuntimeError("CHOLMOD matrix does not keep the pattern's order")
-        self._A = A
-        self._symbolic = self._cholmod.symbolic(A, uplo="L")
+        self._backend.analyse(n, self._rows, self._cols, self._indptr)
         self.stats["analyses"] += 1
 
     def _in_elements(self, keys: np.ndarray) -> np.ndarray:
@@ -190,22 +358,21 @@ class TangentSystem:
     def factorize(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
         """A function that solves K x = b for the symmetric K of lower triangle ``vals``,
         valid until the next call."""
-        self._A.V = self._matrix(vals)  # A.V is a copy on reading: assign the whole
         try:
-            self._cholmod.numeric(self._A, self._symbolic)
-        except ArithmeticError:  # not positive definite: LU as the reference engine does
-            self.stats["superlu"] += 1
+            solve = self._backend.factorize(vals)
+        except _NotPositiveDefiniteError:
+            if hasattr(self._backend, "factorize_indefinite"):
+                self.stats["indefinite"] += 1
+                return self._backend.factorize_indefinite(vals)
+            self.stats["superlu"] += 1  # LU as the reference engine does
             L = sp.csc_matrix((vals, self._rows, self._indptr), shape=(self.n, self.n))
             K = (L + L.T - sp.diags(L.diagonal())).tocsc()
             lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                            options={"SymmetricMode": True})
             return lu.solve
         self.stats["cholesky"] += 1
-        F, cholmod, matrix = self._symbolic, self._cholmod, self._matrix
-
-        def solve(b: np.ndarray) -> np.ndarray:
-            x = matrix(np.ascontiguousarray(b, dtype=float))
-            cholmod.solve(F, x)
-            return np.asarray(x).ravel()
-
         return solve
+
+    def close(self) -> None:
+        """Free the factorization's memory held outside Python (PARDISO's)."""
+        self._backend.close()

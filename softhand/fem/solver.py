@@ -27,7 +27,7 @@ from softhand.fem.body import body_mesh, check_body
 from softhand.fem.contact import GapSet, RoundGaps, plate_gaps, pocket_gaps
 from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
 from softhand.fem.indenter import parse_indenter
-from softhand.fem.linear import TangentSystem
+from softhand.fem.linear import TangentSystem, resolve_solver
 from softhand.fem.materials import Material, Moduli, material
 from softhand.fem.mesh import MESH_LEVELS, Mesh, MeshSpec, build_mesh, full_model
 from softhand.fem.sensors import SensorPatch, SensorReader, default_patches
@@ -97,6 +97,10 @@ class IndentationSettings:
             tangent's fill-reducing ordering computed once per run) or ``"numpy"`` (the
             batched NumPy reference and an ordering per factorization). The same arithmetic:
             curves agree within the Newton tolerance (``softhand bench fe`` runs both).
+        solver: the compiled engine's sparse Cholesky (`softhand.fem.linear.SOLVERS`):
+            ``"auto"`` (MKL PARDISO where the ``softhand[mkl]`` extra is installed, else
+            CHOLMOD), ``"cholmod"`` or ``"pardiso"``. Like ``engine``, not a curve setting: the
+            same arithmetic to rounding; the result records the one used.
         geometry: overrides of `PhalanxGeometry` fields.
         sensors: embedded sensor patches (`softhand.fem.sensors.SensorPatch`) read at
             every output time; None: a 4 x 4 mm patch under the indenter at each placement the
@@ -131,6 +135,7 @@ class IndentationSettings:
     tol_rel: float = 1e-4
     threads: int | None = None
     engine: str = "compiled"
+    solver: str = "auto"
     geometry: dict[str, float] = field(default_factory=dict)
     materials: dict[str, dict] = field(default_factory=dict)
     sensors: tuple[SensorPatch, ...] | None = None
@@ -164,6 +169,7 @@ class IndentationSettings:
             check_threads(self.threads)
         if self.engine not in ENGINES:
             raise ValueError(f"engine = {self.engine!r}: allowed {', '.join(ENGINES)}")
+        resolve_solver(self.solver)
         if not np.isfinite(self.tol_rel) or self.tol_rel < 0:
             raise ValueError(f"tol_rel = {self.tol_rel!r} must be finite and >= 0")
         if self.force_step_N is not None and not self.force_step_N > 0:
@@ -207,6 +213,8 @@ class IndentationResult:
             x across the width, y up, z along the length in 3D), ``weight_mm2`` (each point's
             undeformed area; mm in 2D), ``pressure_MPa`` at each,
             ``force_N`` and ``displacement_mm`` of that state. Empty if the ramp took no step.
+        linear_solver: the sparse solver of the Newton steps (``"pardiso"``, ``"cholmod"``, or
+            ``"superlu"`` on the NumPy engine).
     """
 
     design: str
@@ -223,6 +231,7 @@ class IndentationResult:
     embedded_sensors: dict[str, dict[str, Any]] = field(default_factory=dict)
     contact_area_mm2: np.ndarray | None = None
     plate_pressure: dict[str, Any] = field(default_factory=dict)
+    linear_solver: str = ""
 
     def displacement_at(self, force_N: float) -> float | None:
         """Plate displacement (mm) where the ramp first reaches ``force_N``, or None."""
@@ -276,6 +285,7 @@ class IndentationResult:
             "newton_iterations": int(sum(r["iterations"] for r in self.log)),
             "solver_version": SOLVER_VERSION,
             "engine": s.engine,
+            "linear_solver": self.linear_solver,
             "time_s": self.time_s.tolist(),
             "displacement_mm": self.displacement_mm.tolist(),
             "force_N": self.force_N.tolist(),
@@ -416,6 +426,18 @@ class _Model:
         raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
 
+    def linear_solver(self) -> str:
+        """The sparse solver this run's tangents go to (SuperLU on the NumPy engine)."""
+        if self.settings.engine != "compiled":
+            return "superlu"
+        return resolve_solver(self.settings.solver)
+
+    def close(self) -> None:
+        """Stop the element threads and free the factorization."""
+        self.asm.close()
+        if self._system is not None:
+            self._system.close()
+
     def tangent_system(self) -> TangentSystem:
         """The compiled engine's fixed-pattern tangent (`softhand.fem.linear`), built on
         first use: the elements' pattern and every contact set's couplings."""
@@ -425,7 +447,8 @@ class _Model:
             contacts = [template] + ([self.pocket.G] if self.pocket is not None else [])
             rows, cols, entries = self.asm.pattern()
             self._system = TangentSystem(rows, cols, self.free, self.mesh.n_dofs, contacts,
-                                         entries)
+                                         entries, solver=self.settings.solver,
+                                         threads=self.asm.threads)
         return self._system
 
 
@@ -478,7 +501,7 @@ def indent(
         try:
             return _run(design, s, model, t_start, progress)
         finally:
-            model.asm.close()
+            model.close()
 
 
 def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
@@ -601,4 +624,5 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
                                     "force_N": np.array(readings[p.label])}
                           for p in model.sensors.patches},
         contact_area_mm2=np.array(areas), plate_pressure=pressure,
+        linear_solver=model.linear_solver(),
     )

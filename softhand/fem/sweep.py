@@ -176,15 +176,15 @@ def _body_geometry(body: str) -> dict[str, Any]:
 
 
 def _settings_of(settings: IndentationSettings | dict[str, Any]) -> dict[str, Any]:
-    """The settings that make a curve what it is (threads and the engine do not), as JSON
-    values."""
+    """The settings that make a curve what it is (threads, the engine and the solver do not),
+    as JSON values."""
     import json
 
     data = settings if isinstance(settings, dict) else asdict(settings)
     # folders written before indenters and bodies hold plate curves on the phalanx
     data = {"indenter": "plate", "body": "phalanx", **data}
     return {k: v for k, v in json.loads(json.dumps(data, default=str)).items()
-            if k not in ("threads", "engine")}
+            if k not in ("threads", "engine", "solver")}
 
 
 def folder_conflict(summary: dict[str, Any] | None, settings: IndentationSettings,
