@@ -150,3 +150,45 @@ def test_the_accounting_by_law_holds_all_the_pair_force(envs):
     assert set(acc["by_law_Ns"]) <= {c.law for c in env.pair_laws.values()}
     assert sum(acc["by_law_share_pct"].values()) == pytest.approx(100.0)
     assert acc["contact_laws"] == "geometry"
+
+
+def test_class_laws_refit_alone_reproduce_the_shipped_ones_and_keep_the_rest(tmp_path):
+    """`softhand calibrate --class-laws-only` on the shipped FE folders gives each file's laws
+    per contact class as shipped (the fit is deterministic), and leaves the law, the
+    representations and the plate's pair law as they were; the provenance says how."""
+    import json
+    import shutil
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+    from softhand.paths import SKINS_DIR
+
+    shutil.copytree(SKINS_DIR, tmp_path / "skins")
+    res = CliRunner().invoke(main, ["calibrate", "pocket2-sil", "--class-laws-only", "--out",
+                                    str(tmp_path / "skins"), "--threads", "1", "--json"])
+    assert res.exit_code == 0, res.output
+    old = json.loads((SKINS_DIR / "pocket2-sil.json").read_text(encoding="utf-8"))
+    new = json.loads((tmp_path / "skins" / "pocket2-sil.json").read_text(encoding="utf-8"))
+    assert set(new["pair_laws"]) == set(CLASSES)
+    for key in ("pair_laws", "law", "representations", "pair_law"):
+        assert new[key] == old[key], key
+    assert "--class-laws-only" in new["provenance"]["pair_laws_from"]
+    # the other skins' files are untouched
+    assert ((tmp_path / "skins" / "solid-sil.json").read_bytes()
+            == (SKINS_DIR / "solid-sil.json").read_bytes())
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    (["human-middle-phalanx"], "the designs, which have FE curves per contact class"),
+    (["pocket2-sil", "--representation", "flex"], "with --class-laws-only"),
+])
+def test_class_laws_only_refuses_what_it_cannot_do(tmp_path, args, needle):
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    res = CliRunner().invoke(main, ["calibrate", *args, "--class-laws-only", "--out",
+                                    str(tmp_path / "skins")])
+    assert res.exit_code == 2 and needle in res.output, res.output
+    assert not (tmp_path / "skins").exists() or not any((tmp_path / "skins").iterdir())

@@ -72,6 +72,7 @@ __all__ = [
     "calibrate_design",
     "calibrate_skin",
     "check_fe_folders",
+    "class_folders",
     "class_pair_laws",
     "fe_curves",
     "fit_pad",
@@ -79,6 +80,7 @@ __all__ = [
     "law_curve",
     "loading_error",
     "posture_sensitivity",
+    "refit_class_laws",
     "skin_names",
     "social_touch_record",
 ]
@@ -545,6 +547,21 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     return SkinCalibration(design, law, results, provenance, pair)
 
 
+def class_folders(design: str, fe_dir: str | Path) -> list[str]:
+    """The contact classes besides the plate's whose FE curve of ``design`` the class folders
+    of ``fe_dir`` hold, each folder checked against the plate folder's settings.
+
+    Raises:
+        ValueError: a class folder without a summary, of another indenter or body, or of other
+            settings than the plate folder's (naming the folder).
+    """
+    from softhand.fem.sweep import read_summary
+
+    plate = read_summary(Path(fe_dir))
+    return [key for key in CLASSES if key != PLATE_CLASS
+            and _class_folder_curve(design, key, fe_dir, plate) is not None]
+
+
 def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict | None
                         ) -> tuple[Curve, str] | None:
     """The FE curve of ``design`` for class ``key`` and its mesh level, checked against its
@@ -639,6 +656,38 @@ def skin_names() -> list[str]:
     from softhand.laws.references import HUMAN, PROSTHETIC
 
     return [*DESIGNS, HUMAN, PROSTHETIC]
+
+
+def refit_class_laws(cal: SkinCalibration, fe_dir: str | Path) -> SkinCalibration:
+    """``cal`` with its laws per contact class (``pair_laws``) fitted again from the class
+    folders of ``fe_dir`` (`class_pair_laws`, as `calibrate_design` fits them after the soft
+    contact), everything else as it was: the law, the representations, the plate's pair law.
+    For new class curves (a finer palm mesh) without refitting the representations; the
+    provenance records it (``pair_laws_from``, ``pair_laws_fit_s``).
+
+    Raises:
+        ValueError: ``cal`` has no soft contact (the pair laws start from it), or its design
+            has no FE curves in ``fe_dir``.
+    """
+    from softhand.fem.geometry import DESIGNS
+
+    if cal.design not in DESIGNS:
+        raise ValueError(f"skin {cal.design!r}: only the designs have laws per contact class")
+    if "soft-contact" not in cal.representations:
+        raise ValueError(f"skin {cal.design!r}: no soft-contact representation to start the "
+                         "pair laws from; calibrate it first")
+    fit_curves, _ = fe_curves(cal.design, fe_dir)
+    t0 = time.perf_counter()
+    by_class = class_pair_laws(cal.design, cal.law, fit_curves[0], fe_dir,
+                               reference_mass_kg=CALIBRATION_MASS_KG * MASS_FACTORS[0],
+                               initial=cal.soft_contact)
+    provenance = {**cal.provenance, "pair_laws_fit_s": time.perf_counter() - t0,
+                  "pair_laws_from": "softhand.skin.calibrate.refit_class_laws (`softhand "
+                  "calibrate --class-laws-only`): class_pair_laws on this file's law and soft "
+                  f"contact and the class folders of the FE curves, softhand {__version__}, "
+                  f"MuJoCo {mujoco.__version__}"}
+    return SkinCalibration(cal.design, cal.law, dict(cal.representations), provenance,
+                           cal.pair_law, by_class)
 
 
 def calibrate_skin(name: str, *, fe_dir: str | Path = "calibration/fe",

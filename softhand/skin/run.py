@@ -17,7 +17,8 @@ from softhand.parallel import run_tasks
 from softhand.skin.calibrate import SkinCalibration, calibrate_skin
 from softhand.skin.files import FE_DIR, SKINS_DIR, save_calibration
 
-__all__ = ["METRICS", "CalibrationRun", "calibrate_many", "summary_table"]
+__all__ = ["METRICS", "CalibrationRun", "calibrate_many", "refit_class_laws_many",
+           "summary_table"]
 
 METRICS = ("rms_error_pct_of_2N", "max_error_pct_of_2N", "mass_sensitivity_pct",
            "relaxation_error_pct", "step_us")
@@ -68,6 +69,48 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
         if batch.results:
             index = rebuild_index(out, representations, missing=missing)
     return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
+
+
+def refit_class_laws_many(names: list[str], *, out_dir: str | Path | None = None,
+                          fe_dir: str | Path | None = None, threads: int | None = None,
+                          cluster: str | None = None, show_progress: bool = True
+                          ) -> CalibrationRun:
+    """Fit the laws per contact class of the calibration files of ``names`` in ``out_dir``
+    again from the class folders of ``fe_dir`` (`refit_class_laws`), keeping the rest of each
+    file; write each file and ``index.json`` as `calibrate_many` does (what finished is
+    written, also after Ctrl-C)."""
+    from tqdm import tqdm
+
+    out = Path(out_dir) if out_dir else SKINS_DIR
+    fe = str(Path(fe_dir).resolve()) if fe_dir else str(FE_DIR)
+    skins = str(out.resolve())
+    bar = tqdm(total=len(names), desc="class laws", unit="skin", disable=not show_progress)
+
+    def done(name, ok: bool) -> None:
+        bar.set_postfix_str(name if ok else f"{name} failed")
+        bar.update()
+
+    try:
+        batch = run_tasks(_refit_one, [(n, (n, skins, fe)) for n in names],
+                          threads=threads, cluster=cluster, on_done=done)
+    finally:
+        bar.close()
+    missing = {n: "interrupted" for n in batch.missing}
+    missing.update({n: str(e) for n, e in batch.errors.items()})
+    index = None
+    with interrupts_deferred():
+        for cal in batch.results.values():
+            save_calibration(cal, out)
+        if batch.results:
+            index = rebuild_index(out, missing=missing)
+    return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
+
+
+def _refit_one(name: str, skins_dir: str, fe_dir: str):
+    from softhand.skin.calibrate import refit_class_laws
+    from softhand.skin.files import load_calibration
+
+    return refit_class_laws(load_calibration(name, skins_dir), fe_dir)
 
 
 @dataclass(frozen=True)
