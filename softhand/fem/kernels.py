@@ -186,6 +186,24 @@ def _hyperfoam(C, mu, alpha, beta, S, D):
     return True
 
 
+@njit(cache=True, inline="always")
+def _deformation_gradient(u, elements, dim, dNdX, e, q, F):
+    """F (3 x 3, written into ``F``) at Gauss point ``q`` of element ``e``; returns det F."""
+    nn = elements.shape[1]
+    for i in range(3):
+        for j in range(3):
+            F[i, j] = 1.0 if i == j else 0.0
+    for n in range(nn):
+        node = elements[e, n]
+        for i in range(dim):
+            ui = u[node * dim + i]
+            for j in range(dim):
+                F[i, j] += ui * dNdX[e, q, n, j]
+    return (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
+            - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
+            + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+
+
 @njit(parallel=True, cache=True)
 def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay, ramp,
                    S0_old, H_old, visco, fe, F_out, S_out, D_out, S0_new, H_new):
@@ -214,18 +232,7 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
         for r in range(nn * dim):
             fe[e, r] = 0.0
         for q in range(nq):
-            for i in range(3):
-                for j in range(3):
-                    F[i, j] = 1.0 if i == j else 0.0
-            for n in range(nn):
-                node = elements[e, n]
-                for i in range(dim):
-                    ui = u[node * dim + i]
-                    for j in range(dim):
-                        F[i, j] += ui * dNdX[e, q, n, j]
-            det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
-                   - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
-                   + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+            det = _deformation_gradient(u, elements, dim, dNdX, e, q, F)
             for i in range(3):
                 for j in range(3):
                     F_out[e, q, i, j] = F[i, j]
@@ -347,23 +354,11 @@ def scatter_add(out, index, values):
 def inverted_points(u, elements, dim, dNdX):
     """The number of Gauss points with det F <= 0 (or not a number) at displacement ``u``:
     the deformation gradient of `evaluate_group`, without the material."""
-    ne, nq, nn = dNdX.shape[0], dNdX.shape[1], dNdX.shape[2]
+    ne, nq = dNdX.shape[0], dNdX.shape[1]
     bad = np.zeros(ne, dtype=np.int64)
     for e in prange(ne):
         F = np.empty((3, 3))
         for q in range(nq):
-            for i in range(3):
-                for j in range(3):
-                    F[i, j] = 1.0 if i == j else 0.0
-            for n in range(nn):
-                node = elements[e, n]
-                for i in range(dim):
-                    ui = u[node * dim + i]
-                    for j in range(dim):
-                        F[i, j] += ui * dNdX[e, q, n, j]
-            det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
-                   - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
-                   + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
-            if not det > 0.0:
+            if not _deformation_gradient(u, elements, dim, dNdX, e, q, F) > 0.0:
                 bad[e] += 1
     return int(bad.sum())

@@ -12,15 +12,18 @@ Two factorizations serve, the same arithmetic to rounding (``softhand bench fe``
 
 - MKL PARDISO (Schenk and Gaertner, Future Generation Computer Systems 20, 2004; as shipped in
   Intel's MKL wheels, loaded by pypardiso; the ``softhand[mkl]`` extra, x86-64 Linux and
-  Windows): nested-dissection ordering (METIS) and threaded supernodal factorization. Chosen
-  where it is installed: on the 3D tangents of ``pocket2-sil`` (4.9k free dofs) its numeric
-  factorization took a third of CHOLMOD's time on one thread.
+  Windows): nested-dissection ordering (METIS) and threaded supernodal factorization, on the
+  GNU OpenMP runtime that numba's kernels use (`_Pardiso.library`). Chosen where it is
+  installed: on the 3D tangents of ``pocket2-sil`` (4.9k free dofs) its numeric factorization
+  took a third of CHOLMOD's time on one thread, a fifth on two.
 - CHOLMOD (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; as shipped in CVXOPT's
   binary wheels for Linux, macOS and Windows: no compiler, no SuiteSparse headers): everywhere
   else. Its numeric factorization takes about 0.6x SuperLU's time.
 
 Not in the default install because MKL's wheel is 230 MB (690 MB installed), which a user of the
-handshake alone does not need.
+handshake alone does not need. Once PARDISO has run, MKL's BLAS is among the process's global
+symbols, so CHOLMOD run later in the same process may call it instead of its own: the same
+answers to rounding (within 1e-11 N on a whole curve), not bit for bit.
 
 The tangent is symmetric and almost always positive definite. One that is not (the
 factorization reports it; a few iterations of a run as a pocket's roof buckles) is solved by
@@ -113,24 +116,45 @@ class _Cholmod:
         pass
 
 
+# mkl_service.h: MKL_THREADING_INTEL 0, SEQUENTIAL 1, PGI 2, GNU 3, TBB 4
+_MKL_THREADING_SEQUENTIAL = 1
+_MKL_THREADING_GNU = 3
+
+
 class _Pardiso:
     """MKL PARDISO, called through ctypes on the library pypardiso loads, with MKL's default
     parameters (METIS nested-dissection ordering, one-based indices): real symmetric positive
     definite (``mtype = 2``), and for a tangent that is not, real symmetric indefinite
     (``mtype = -2``: Bunch-Kaufman pivoting, small pivots perturbed and the solution refined).
     The lower triangle in CSC is the upper triangle in CSR, the layout PARDISO takes, so the
-    pattern's arrays serve as they are. Its threads are set for each call
-    (``mkl_set_num_threads_local``) and put back after it."""
+    pattern's arrays serve as they are. MKL's threads are on GNU OpenMP (`library`), set for
+    each call (``mkl_set_num_threads_local``) and put back after it."""
 
     name = "pardiso"
 
     @staticmethod
     @functools.cache
     def library():
+        import ctypes
+        import ctypes.util
+
         from pypardiso.pardiso_wrapper import PyPardisoSolver
 
         loader = PyPardisoSolver(mtype=2)  # finds mkl_rt and declares pardiso's signature
-        return loader.libmkl, loader._mkl_pardiso
+        lib = loader.libmkl
+        # One OpenMP runtime in the process: MKL's threads on GNU OpenMP, the runtime numba's
+        # kernels run on. Its Intel layer would load Intel's runtime, whose GOMP entry points
+        # then serve the whole process. The GNU layer finds libgomp among the process's global
+        # symbols; without libgomp, MKL runs sequentially. Set before any other MKL call.
+        try:
+            ctypes.CDLL(ctypes.util.find_library("gomp") or "libgomp.so.1",
+                        mode=ctypes.RTLD_GLOBAL)
+            layer = _MKL_THREADING_GNU
+        except OSError:
+            layer = _MKL_THREADING_SEQUENTIAL
+        if lib.MKL_Set_Threading_Layer(layer) != layer:
+            lib.MKL_Set_Threading_Layer(_MKL_THREADING_SEQUENTIAL)
+        return lib, loader._mkl_pardiso
 
     def __init__(self, threads: int) -> None:
         import ctypes
@@ -253,7 +277,7 @@ class TangentSystem:
             pattern's value (``rows``, ``cols``) it adds to (the compiled element tangents,
             `Assembler.pattern`); None: the element data are the pattern's values themselves.
         solver: one of `SOLVERS`.
-        threads: the sparse Cholesky's threads (PARDISO's; CHOLMOD here runs on one).
+        threads: PARDISO's threads (CHOLMOD here runs on one).
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, free: np.ndarray, n_dofs: int,

@@ -45,30 +45,11 @@ def calibrate_many(names: list[str], representations: tuple[str, ...], *,
         cluster: a Dask scheduler's address (``tcp://HOST:PORT``): the skins are calibrated on
             its workers; not with ``threads`` (`softhand.parallel.run_tasks`).
     """
-    from tqdm import tqdm
-
     out = Path(out_dir) if out_dir else SKINS_DIR
     fe = str(Path(fe_dir).resolve()) if fe_dir else str(FE_DIR)  # workers may have another cwd
-    bar = tqdm(total=len(names), desc="calibrate", unit="skin", disable=not show_progress)
-
-    def done(name, ok: bool) -> None:
-        bar.set_postfix_str(name if ok else f"{name} failed")
-        bar.update()
-
-    try:
-        batch = run_tasks(_one, [(n, (n, representations, fe)) for n in names],
-                          threads=threads, cluster=cluster, on_done=done)
-    finally:
-        bar.close()
-    missing = {n: "interrupted" for n in batch.missing}
-    missing.update({n: str(e) for n, e in batch.errors.items()})
-    index = None
-    with interrupts_deferred():  # the files and their index are written together
-        for cal in batch.results.values():
-            save_calibration(_merged(cal, out), out)
-        if batch.results:
-            index = rebuild_index(out, representations, missing=missing)
-    return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
+    return _skin_batch("calibrate", _one, [(n, (n, representations, fe)) for n in names], out,
+                       lambda cal: _merged(cal, out), representations, threads=threads,
+                       cluster=cluster, show_progress=show_progress)
 
 
 def refit_class_laws_many(names: list[str], *, out_dir: str | Path | None = None,
@@ -79,30 +60,39 @@ def refit_class_laws_many(names: list[str], *, out_dir: str | Path | None = None
     again from the class folders of ``fe_dir`` (`refit_class_laws`), keeping the rest of each
     file; write each file and ``index.json`` as `calibrate_many` does (what finished is
     written, also after Ctrl-C)."""
-    from tqdm import tqdm
-
     out = Path(out_dir) if out_dir else SKINS_DIR
     fe = str(Path(fe_dir).resolve()) if fe_dir else str(FE_DIR)
     skins = str(out.resolve())
-    bar = tqdm(total=len(names), desc="class laws", unit="skin", disable=not show_progress)
+    return _skin_batch("class laws", _refit_one, [(n, (n, skins, fe)) for n in names], out,
+                       lambda cal: cal, None, threads=threads, cluster=cluster,
+                       show_progress=show_progress)
+
+
+def _skin_batch(desc: str, work, tasks: list, out: Path, to_write, representations, *,
+                threads: int | None, cluster: str | None, show_progress: bool
+                ) -> CalibrationRun:
+    """Run ``work`` over ``tasks`` (`run_tasks`) with a progress bar, then write each finished
+    skin (``to_write(cal)``) and ``index.json`` together (Ctrl-C held until both are written)."""
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(tasks), desc=desc, unit="skin", disable=not show_progress)
 
     def done(name, ok: bool) -> None:
         bar.set_postfix_str(name if ok else f"{name} failed")
         bar.update()
 
     try:
-        batch = run_tasks(_refit_one, [(n, (n, skins, fe)) for n in names],
-                          threads=threads, cluster=cluster, on_done=done)
+        batch = run_tasks(work, tasks, threads=threads, cluster=cluster, on_done=done)
     finally:
         bar.close()
     missing = {n: "interrupted" for n in batch.missing}
     missing.update({n: str(e) for n, e in batch.errors.items()})
     index = None
-    with interrupts_deferred():
+    with interrupts_deferred():  # the files and their index are written together
         for cal in batch.results.values():
-            save_calibration(cal, out)
+            save_calibration(to_write(cal), out)
         if batch.results:
-            index = rebuild_index(out, missing=missing)
+            index = rebuild_index(out, representations, missing=missing)
     return CalibrationRun(index, list(batch.results), missing, batch.interrupted)
 
 
