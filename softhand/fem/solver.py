@@ -169,7 +169,8 @@ class IndentationSettings:
             check_threads(self.threads)
         if self.engine not in ENGINES:
             raise ValueError(f"engine = {self.engine!r}: allowed {', '.join(ENGINES)}")
-        resolve_solver(self.solver)
+        if self.solver != "auto":  # auto is resolved when a run needs it (it loads MKL)
+            resolve_solver(self.solver)
         if not np.isfinite(self.tol_rel) or self.tol_rel < 0:
             raise ValueError(f"tol_rel = {self.tol_rel!r} must be finite and >= 0")
         if self.force_step_N is not None and not self.force_step_N > 0:
