@@ -40,7 +40,7 @@ def _said_before_work(monkeypatch, module, work: str, run, *args, **kwargs) -> l
 def test_bench_fe_says_each_run_before_it(monkeypatch, tmp_path):
     import softhand.bench.fe as fe
 
-    assert _said_before_work(monkeypatch, fe, "indent", fe.run_fe_benchmark, tmp_path) == [
+    assert _said_before_work(monkeypatch, fe, "_fresh_run", fe.run_fe_benchmark, tmp_path) == [
         "engines on pocket2-sil, ramp 1 of 3: numpy"]
 
 

@@ -7,7 +7,8 @@ Measures, in one process on this machine:
   engine (numba kernels, the run's fixed pattern) on each sparse Cholesky installed here
   (CHOLMOD; MKL PARDISO with the ``softhand[mkl]`` extra), on one 3D design to 2 N, runs
   interleaved (reference, CHOLMOD, PARDISO, reference, ...) so that a drift of the machine hits
-  all; with the Newton iterations and the largest difference between their force curves;
+  all, each run in a fresh process (so CHOLMOD runs on its own BLAS, not on MKL's); with the
+  Newton iterations and the largest difference between their force curves;
 * at the default settings (the compiled engine, PARDISO where installed): one 3D design to
   2 N at the default mesh (ramp only), and the same with the 10 s hold;
 * the same ramp with every core of the machine busy with other work (an external CPU load of one
@@ -33,6 +34,8 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from softhand.bench.common import machine_info, machine_line
 from softhand.fem.geometry import DESIGNS
@@ -190,23 +193,42 @@ def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
             for key, engine, solver, _ in runs_of:
                 say(f"engines on pocket2-sil, {label.replace('_', ' + ')} {i + 1} of {runs}: "
                     f"{key}")
-                r = indent("pocket2-sil", IndentationSettings(hold_s=hold, engine=engine,
-                                                              solver=solver))
-                walls[key].append(r.wall_s)
+                r = _fresh_run(hold, engine, solver)
+                walls[key].append(r["wall_s"])
                 last[key] = r
-        ref = last["numpy"]
+        ref = np.asarray(last["numpy"]["force_N"])
         out[label] = {}
         for key, w in walls.items():
             new = last[key]
-            same_points = ref.force_N.shape == new.force_N.shape
+            force = np.asarray(new["force_N"])
+            same_points = ref.shape == force.shape
             out[label][key] = {
                 "wall_s": statistics.median(w), "walls_s": w,
                 "speedup": statistics.median(walls["numpy"]) / statistics.median(w),
-                "newton_iterations": int(sum(x["iterations"] for x in new.log)),
-                "steps": len(new.log), "d2N_mm": new.displacement_at(2.0),
-                "max_force_difference_N": (float(abs(ref.force_N - new.force_N).max())
+                "newton_iterations": new["newton_iterations"], "steps": new["n_steps"],
+                "d2N_mm": new["displacement_at_2N_mm"],
+                "max_force_difference_N": (float(abs(ref - force).max())
                                            if same_points else None)}
     return out
+
+
+def _fresh_run(hold: float, engine: str, solver: str) -> dict[str, Any]:
+    """One pocket2-sil run in a new Python process (its summary, `IndentationResult.summary`),
+    so that no engine runs on libraries another one loaded: once MKL has run, its BLAS is
+    among the process's global symbols and CHOLMOD would call it (`softhand.fem.linear`)."""
+    given = f"engine={engine!r}, solver={solver!r}"
+    code = ("import json, sys\n"
+            "from softhand.fem.solver import IndentationSettings, indent\n"
+            # a small run first: the compiled kernels load from numba's cache, the solver's
+            # libraries load, outside the timed run (as in a process that has run before)
+            f"indent('solid-sil', IndentationSettings(mesh='coarse', hold_s=0.0, {given}))\n"
+            f"r = indent('pocket2-sil', IndentationSettings(hold_s={hold!r}, {given}))\n"
+            "json.dump(r.summary(), sys.stdout)\n")
+    done = subprocess.run([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"the {engine}/{solver} run failed: {done.stderr.strip()[-500:]}")
+    return json.loads(done.stdout)
 
 
 def _engine_lines(d: dict[str, Any]) -> list[str]:
