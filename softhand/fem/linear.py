@@ -15,7 +15,8 @@ Two factorizations serve, the same arithmetic to rounding (``softhand bench fe``
   Windows): nested-dissection ordering (METIS) and threaded supernodal factorization, on the
   GNU OpenMP runtime that numba's kernels use (`_Pardiso.library`). Chosen where it is
   installed: on the 3D tangents of ``pocket2-sil`` (4.9k free dofs) its numeric factorization
-  took a third of CHOLMOD's time on one thread, a fifth on two.
+  took 0.3-0.6x CHOLMOD's time on one thread and about 0.3x on two (``softhand bench fe`` has
+  whole runs).
 - CHOLMOD (Chen, Davis, Hager and Rajamanickam, ACM TOMS 35, 2008; as shipped in CVXOPT's
   binary wheels for Linux, macOS and Windows: no compiler, no SuiteSparse headers): everywhere
   else. Its numeric factorization takes about 0.6x SuperLU's time.
