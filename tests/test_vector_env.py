@@ -205,3 +205,40 @@ def test_the_warp_backend_gives_the_cpu_batchs_region_forces():
 def test_a_bad_backend_is_refused_in_one_line():
     with pytest.raises(ValueError, match="backend = 'jax': allowed 'cpu'"):
         HandshakeVectorEnv(num_envs=1, backend="jax")
+
+
+@pytest.mark.slow
+def test_the_warp_backend_keeps_standing_worlds_and_resets_one_world_alone():
+    """backend="warp" steps every world on the device, so a world that must stand still (its
+    episode over under AutoresetMode.DISABLED, or diverged) gets its state copied back after the
+    step, and a reset of one world gives the others their state back: both exactly, field by
+    field. Skipped without MuJoCo Warp (``pip install 'softhand[gpu]'``)."""
+    pytest.importorskip("mujoco_warp", reason="MuJoCo Warp not installed: pip install "
+                                              "'softhand[gpu]' (optional; CI has no GPU)")
+    from softhand.envs.warp import STATE_FIELDS
+
+    vec = HandshakeVectorEnv(num_envs=2, backend="warp")
+    vec.reset(seed=0)
+    phys = vec.physics
+    zero = np.zeros((2, phys.model.nu))
+    for _ in range(30):  # into the reach: both worlds moving
+        phys.ctrl[:] = zero
+        phys.advance(np.array([True, True]), np.repeat(
+            phys._state()["mocap_pos"][:, None, phys._mocap], phys.frame_skip, axis=1))
+    before = phys._state()
+    moving = phys._state()["mocap_pos"][:, None, phys._mocap] + np.array([0.0, 0.0, 1e-3])
+    phys.advance(np.array([True, False]), np.repeat(moving, phys.frame_skip, axis=1))
+    after = phys._state()
+    for f in STATE_FIELDS:
+        assert np.array_equal(after[f][1], before[f][1]), f  # world 1 stood still, exactly
+    assert not np.array_equal(after["qpos"][0], before["qpos"][0])  # world 0 stepped
+    assert after["time"][0] > before["time"][0] and after["time"][1] == before["time"][1]
+    # a reset of world 0 leaves world 1 as it was
+    start = phys._state()["mocap_pos"][0, phys._mocap]
+    quat = phys._state()["mocap_quat"][0, phys._mocap]
+    phys.reset([0], start[None], quat[None], [()])
+    again = phys._state()
+    for f in STATE_FIELDS:
+        assert np.array_equal(again[f][1], after[f][1]), f
+    assert again["time"][0] == 0.0
+    vec.close()

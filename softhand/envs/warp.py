@@ -111,7 +111,9 @@ class WarpPhysics:
         self._contacts = None  # pulled when first asked for (contacts_above)
 
     def _state(self) -> dict[str, np.ndarray]:
-        return {f: getattr(self.dw, f).numpy() for f in STATE_FIELDS}
+        """Host copies of the state fields (copies: on Warp's CPU device ``numpy()`` is a view
+        of the live array, which the next step would overwrite)."""
+        return {f: getattr(self.dw, f).numpy().copy() for f in STATE_FIELDS}
 
     def _restore(self, saved: dict[str, np.ndarray], worlds: np.ndarray) -> None:
         """Give ``worlds`` (indices) their ``saved`` state back."""
