@@ -79,17 +79,21 @@ class _NotPositiveDefiniteError(ArithmeticError):
 
 
 class _Cholmod:
-    """CHOLMOD's supernodal Cholesky (CVXOPT) on the lower triangle in CSC."""
+    """CHOLMOD's supernodal Cholesky (CVXOPT) on the lower triangle in CSC; a tangent that is
+    not positive definite goes to SuperLU in symmetric mode, as the NumPy reference engine
+    solves every tangent."""
 
-    name = "cholmod"
+    #: the `TangentSystem.stats` key of `factorize_indefinite`
+    indefinite = "superlu"
 
-    def __init__(self, threads: int) -> None:
+    def __init__(self) -> None:
         from cvxopt import cholmod, matrix, spmatrix
 
         self._cholmod, self._matrix, self._spmatrix = cholmod, matrix, spmatrix
         cholmod.options["supernodal"] = 2
 
     def analyse(self, n: int, rows: np.ndarray, cols: np.ndarray, indptr: np.ndarray) -> None:
+        self._n, self._rows, self._indptr = n, rows, indptr
         probe = np.arange(rows.size, dtype=float) + 1.0
         matrix = self._matrix
         A = self._spmatrix(matrix(probe), matrix(rows), matrix(cols), (n, n))
@@ -113,6 +117,12 @@ class _Cholmod:
 
         return solve
 
+    def factorize_indefinite(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        L = sp.csc_matrix((vals, self._rows, self._indptr), shape=(self._n, self._n))
+        K = (L + L.T - sp.diags(L.diagonal())).tocsc()
+        return spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                         options={"SymmetricMode": True}).solve
+
     def close(self) -> None:
         pass
 
@@ -131,7 +141,7 @@ class _Pardiso:
     pattern's arrays serve as they are. MKL's threads are on GNU OpenMP (`library`), set for
     each call (``mkl_set_num_threads_local``) and put back after it."""
 
-    name = "pardiso"
+    indefinite = "indefinite"
 
     @staticmethod
     @functools.cache
@@ -285,7 +295,7 @@ class TangentSystem:
                  contacts: list[sp.csr_matrix], entries: np.ndarray | None = None,
                  solver: str = "auto", threads: int = 1) -> None:
         self.solver = resolve_solver(solver)
-        self._backend = (_Pardiso if self.solver == "pardiso" else _Cholmod)(threads)
+        self._backend = _Pardiso(threads) if self.solver == "pardiso" else _Cholmod()
         fmap = np.full(n_dofs, -1, dtype=np.int64)
         fmap[free] = np.arange(free.size)
         n = free.size
@@ -386,15 +396,8 @@ class TangentSystem:
         try:
             solve = self._backend.factorize(vals)
         except _NotPositiveDefiniteError:
-            if hasattr(self._backend, "factorize_indefinite"):
-                self.stats["indefinite"] += 1
-                return self._backend.factorize_indefinite(vals)
-            self.stats["superlu"] += 1  # LU as the reference engine does
-            L = sp.csc_matrix((vals, self._rows, self._indptr), shape=(self.n, self.n))
-            K = (L + L.T - sp.diags(L.diagonal())).tocsc()
-            lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True})
-            return lu.solve
+            self.stats[self._backend.indefinite] += 1
+            return self._backend.factorize_indefinite(vals)
         self.stats["cholesky"] += 1
         return solve
 
