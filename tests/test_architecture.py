@@ -2,7 +2,7 @@
 
 Stages, in order (docs/architecture.md): fem -> laws -> skin -> sensors (branching off the FE) -> hands
 -> envs -> viz, then the benchmarks and the command line above them all. The base modules (paths,
-io, validate, paper, parallel, warn, the package itself) may be imported by every stage.
+io, validate, paper, parallel, warn, compiled, the package itself) may be imported by every stage.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "softhand"
 ORDER = ("fem", "laws", "skin", "sensors", "hands", "envs", "viz", "bench", "cli")
-BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "data"}
+BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "compiled", "data"}
 CLI = {"cli", "cli_inputs"}
 
 
@@ -53,5 +53,5 @@ def test_every_stage_imports_only_earlier_stages():
 
 
 def test_base_modules_import_no_stage():
-    for name in ("paths", "io", "validate", "paper", "parallel", "warn"):
+    for name in ("paths", "io", "validate", "paper", "parallel", "warn", "compiled"):
         assert _imports(PACKAGE / f"{name}.py") <= BASE, name

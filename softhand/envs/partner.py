@@ -24,11 +24,13 @@ shake moves both hands together and is left out, "a scene models only what it ne
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numba import njit, vectorize
 
 from softhand.hands.grasp import Grasp
 from softhand.hands.partner import PARTNER_JOINTS
@@ -96,24 +98,45 @@ class Timeline:
                                                 self.release_s, self.return_s)))
 
 
-def _clip(x, lo: float, hi: float):
-    """np.clip(x, lo, hi) (the same values, NaN kept), without its dispatch wrappers, which cost
-    several times the arithmetic on a single env's one world."""
-    return np.minimum(np.maximum(x, lo), hi)
+@njit(cache=True, inline="always")
+def _clip(x: float, lo: float, hi: float) -> float:
+    """min(max(x, lo), hi), NaN kept (as np.minimum(np.maximum(x, lo), hi))."""
+    if x != x:
+        return x
+    return min(max(x, lo), hi)
 
 
+@vectorize(["float64(float64)"], cache=True)
 def _min_jerk(s):
-    """Minimum-jerk blend 0 -> 1 of s in [0, 1] (clipped), for a number or an array."""
+    """Minimum-jerk blend 0 -> 1 of s in [0, 1] (clipped): a ufunc, for a number or an array,
+    and for the compiled per-step kernels."""
     s = _clip(s, 0.0, 1.0)
-    # float_power is C's pow, as Python's s**3 on a float: numpy's s**3 differs in the last bit
-    # for about 5 % of arrays' entries, and a handshake amplifies that to 1e-9 N
-    return np.float_power(s, 3) * (10 - 15 * s + 6 * s * s)
+    # C's pow, as Python's s**3 on a float (numpy's s**3 differs in the last bit for about 5 % of
+    # an array's entries, and a handshake amplifies that to 1e-9 N)
+    return math.pow(s, 3.0) * (10.0 - 15.0 * s + 6.0 * s * s)
+
+
+@njit(cache=True, inline="always")
+def _phase(ends: np.ndarray, t: float) -> int:
+    """Index in PHASES at time ``t`` of one world whose phases but ``done`` end at ``ends``."""
+    k = 0
+    for e in ends:
+        k += e <= t
+    return min(k, len(PHASES) - 1)
 
 
 def phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Index in PHASES of each world's phase at its time: ``ends`` (W, 5) the end of each phase
     but ``done`` (Timeline.ends per world), ``t`` (W,) (s)."""
-    return np.minimum((ends <= np.asarray(t, float)[:, None]).sum(axis=1), len(PHASES) - 1)
+    return _phase_index(ends, np.asarray(t, float).reshape(-1))
+
+
+@njit(cache=True)
+def _phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
+    out = np.empty(t.size, np.int64)
+    for w in range(t.size):
+        out[w] = _phase(ends[w], t[w])
+    return out
 
 
 #: Time from the end of the reach to the grasp posture (s): the digits close over the other hand
@@ -250,35 +273,43 @@ class PartnerScript:
         """Every world's digit joint targets (W, servos) at its time ``t`` (W,) from the summed
         force its phalanges feel (``grip_force_N``, (W,)): open on the reach, close to the grasp,
         regulate, then open."""
-        t = np.asarray(t, float)
-        phase = phase_index(self.ends, t)
-        holding = (phase == 1) | (phase == 2)
-        out = self.open.copy()  # the reach
-        if holding.any():
-            # every world (a single env's one): a slice, which numpy indexes without a copy
-            h = slice(None) if holding.all() else holding
-            s = _min_jerk((t[h] - self.ends[h, 0]) / CLOSE_S)[:, None]
-            target = self.grip_forces_N[h]
-            error = _clip((target - grip_force_N[h]) / target, -1.0, 1.0)
+        return _grips(np.asarray(t, float).reshape(-1),
+                      np.asarray(grip_force_N, float).reshape(-1), float(dt), self.ends,
+                      self.open, self.grasp, self.effort_dir, self.q_max, self.grip_forces_N,
+                      self._integral, self.efforts, self._release_from, self._released)
+
+
+@njit(cache=True)
+def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, integral, efforts,
+           release_from, released):
+    """`PartnerScript.grips` of every world, compiled (a few microseconds a step, where numpy's
+    calls on one world's dozen numbers took tens); updates the regulator's state arrays in place.
+    """
+    out = open_q.copy()  # the reach
+    for w in range(t.size):
+        phase = _phase(ends[w], t[w])
+        if phase == 1 or phase == 2:
+            s = _min_jerk((t[w] - ends[w, 0]) / CLOSE_S)
+            target = grip_N[w]
+            error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
             # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
             # proportional part adds half of it
-            self._integral[h] = _clip(self._integral[h] + MAX_EFFORT_RAD * error * dt / 0.1,
-                                      0.0, MAX_EFFORT_RAD)
-            self.efforts[h] = _clip(self._integral[h] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
-                                    MAX_EFFORT_RAD)
-            q = np.minimum(self.open[h] + s * (self.grasp[h] - self.open[h])
-                           + self.efforts[h, None] * self.effort_dir[h], self.q_max[h])
-            self._release_from[h] = q
-            self._released[h] = True
-            out[h] = q
-        released = phase >= 3
-        if released.any():  # the effort goes and the hand opens in 0.2 s
-            r = slice(None) if released.all() else released
-            self.efforts[r] = self._integral[r] = 0.0
-            held = np.where(self._released[r, None], self._release_from[r], self.grasp[r])
-            s = _min_jerk((t[r] - self.ends[r, 2]) / 0.2)[:, None]
-            out[r] = held + s * (self.open[r] - held)
-        return out
+            integral[w] = _clip(integral[w] + MAX_EFFORT_RAD * error * dt / 0.1, 0.0,
+                                MAX_EFFORT_RAD)
+            efforts[w] = _clip(integral[w] + 0.5 * MAX_EFFORT_RAD * error, 0.0, MAX_EFFORT_RAD)
+            for j in range(out.shape[1]):
+                q = (open_q[w, j] + s * (grasp_q[w, j] - open_q[w, j])
+                     + efforts[w] * effort_dir[w, j])
+                q = q if q != q else min(q, q_max[w, j])  # np.minimum: NaN kept
+                release_from[w, j] = out[w, j] = q
+            released[w] = True
+        elif phase >= 3:  # the effort goes and the hand opens in 0.2 s
+            efforts[w] = integral[w] = 0.0
+            s = _min_jerk((t[w] - ends[w, 2]) / 0.2)
+            for j in range(out.shape[1]):
+                held = release_from[w, j] if released[w] else grasp_q[w, j]
+                out[w, j] = held + s * (open_q[w, j] - held)
+    return out
 
 
 #: How far inside its range the open hand holds a joint whose range starts at 0 (PIP, thumb MCP):

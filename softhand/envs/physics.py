@@ -34,8 +34,10 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from numba import njit
 
-from softhand.hands.skeleton import SENSOR_SLOTS, contact_sensor_force
+from softhand.compiled import pairwise_sum
+from softhand.hands.skeleton import SENSOR_SLOTS
 
 __all__ = ["Divergence", "DivergenceError", "MujocoPhysics", "SensorLayout", "contacts_above",
            "diagnose", "mujoco_warnings_kept"]
@@ -179,12 +181,11 @@ class MujocoPhysics:
             mujoco.mj_step(m, d)
         finally:
             opt.disableflags = flags
-        if d.time < t + 0.5 * h or self._warnings.any():
-            self.divergence = self._divergence(t if d.time < t + 0.5 * h else d.time)
-        # a sum is finite only if every entry is (an overflow to inf is a divergence anyway);
+        if d.time < t + 0.5 * h:
+            self.divergence = self._divergence(t)
         # MuJoCo checks the state (and every step's qacc) at the start of its next step, so the
         # state the last step made is checked here
-        elif not math.isfinite(self.qpos.sum() + self.qvel.sum()):
+        elif not _settled(self._warnings, self.qpos, self.qvel):
             self.divergence = self._divergence(d.time)
         return self.divergence
 
@@ -214,13 +215,28 @@ def contacts_above(d: mujoco.MjData, limits: np.ndarray
     if d.ncon == 0:
         return np.zeros((0, 2), int), np.zeros(0), np.zeros(0)
     con = d.contact
-    adr = con.efc_address
-    live = adr >= 0
-    geoms = con.geom[live]
-    force = d.efc_force[adr[live]]  # elliptic cones: a contact's first row is its normal
-    top = limits[geoms[:, 0], geoms[:, 1]]
-    over = force > top
-    return geoms[over], force[over], top[over]
+    return _above(con.geom, con.efc_address, d.efc_force, limits)
+
+
+@njit(cache=True)
+def _above(geom, efc_address, efc_force, limits):
+    """`contacts_above` on the contact arrays, compiled (elliptic cones: a contact's first
+    constraint row is its normal force)."""
+    keep = np.zeros(geom.shape[0], np.bool_)
+    for c in range(geom.shape[0]):
+        adr = efc_address[c]
+        keep[c] = adr >= 0 and efc_force[adr] > limits[geom[c, 0], geom[c, 1]]
+    geoms = geom[keep].astype(np.int64)
+    force = np.empty(geoms.shape[0])
+    top = np.empty(geoms.shape[0])
+    for k in range(geoms.shape[0]):
+        top[k] = limits[geoms[k, 0], geoms[k, 1]]
+    k = 0
+    for c in range(geom.shape[0]):
+        if keep[c]:
+            force[k] = efc_force[efc_address[c]]
+            k += 1
+    return geoms, force, top
 
 
 class SensorLayout:
@@ -232,45 +248,100 @@ class SensorLayout:
 
     def __init__(self, m: mujoco.MjModel, region_sensors: list[str], feel_sensors: list[str],
                  bone_sensors: list[tuple[str, ...]] | None = None) -> None:
-        adr = np.array([m.sensor_adr[m.sensor(s).id] for s in region_sensors])
-        # SENSOR_SLOTS slots of (found, force xyz in the contact frame); slot 0's found counts
-        # every match
-        self._sensor_idx = adr[:, None] + np.arange(4 * SENSOR_SLOTS)[None, :]
-        self._found_idx = adr
+        # a contact sensor's SENSOR_SLOTS slots of (found, force xyz in the contact frame) start
+        # at its address; slot 0's found counts every match
+        self._found_idx = np.array([m.sensor_adr[m.sensor(s).id] for s in region_sensors], int)
         bones = [(i, m.sensor_adr[m.sensor(s).id]) for i, names in enumerate(bone_sensors or [])
                  for s in names]
         self._n_regions = len(region_sensors)
         self._bone_region = np.array([i for i, _ in bones], int)
-        self._bone_idx = (np.array([a for _, a in bones], int)[:, None]
-                          + np.arange(4 * SENSOR_SLOTS)[None, :] if bones
-                          else np.zeros((0, 4 * SENSOR_SLOTS), int))
-        # a region's bone sensors are consecutive: each region's sum is one reduceat segment
-        self._bone_regions, self._bone_starts = np.unique(self._bone_region, return_index=True)
-        feel = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors])
-        self._feel_idx = feel[:, None] + np.arange(1, 4)[None, :]  # net force xyz per tissue
+        self._bone_adr = np.array([a for _, a in bones], int)
+        # a region's bone sensors are consecutive: each region's sum is one segment
+        self._bone_starts = np.unique(self._bone_region, return_index=True)[1].astype(int)
+        self._feel_adr = np.array([m.sensor_adr[m.sensor(s).id] for s in feel_sensors], int)
 
     def region_forces(self, sensordata: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per region (last axis): the force on its sensed skin and bone together (N), and the
         bone's part."""
-        lead = sensordata.shape[:-1]
-        skin = contact_sensor_force(
-            sensordata[..., self._sensor_idx].reshape(*lead, -1, SENSOR_SLOTS, 4))
-        bone = np.zeros((*lead, self._n_regions))
-        if self._bone_idx.size:
-            per_bone = contact_sensor_force(
-                sensordata[..., self._bone_idx].reshape(*lead, -1, SENSOR_SLOTS, 4))
-            # each region's bones summed in order (a few per region: a sequential sum)
-            bone[..., self._bone_regions] = np.add.reduceat(per_bone, self._bone_starts,
-                                                            axis=-1)
-        return skin + bone, bone
+        rows = np.atleast_2d(sensordata)
+        total, bone = _region_forces(rows, self._found_idx, self._bone_adr, self._bone_region,
+                                     self._bone_starts, self._n_regions)
+        return (total, bone) if sensordata.ndim > 1 else (total[0], bone[0])
 
     def saturated(self, sensordata: np.ndarray) -> np.ndarray:
         """How many region sensors matched more contacts than they have slots."""
-        return (sensordata[..., self._found_idx] > SENSOR_SLOTS).sum(axis=-1)
+        out = _saturated(np.atleast_2d(sensordata), self._found_idx)
+        return out if sensordata.ndim > 1 else out[0]
 
     def feel(self, sensordata: np.ndarray) -> np.ndarray:
         """Net force (N) on each of the partner's phalanx tissues (last axis)."""
-        return np.linalg.norm(sensordata[..., self._feel_idx], axis=-1)
+        rows = np.atleast_2d(sensordata)
+        out = _feel(rows, self._feel_adr)
+        return out if sensordata.ndim > 1 else out[0]
+
+
+@njit(cache=True)
+def _slots_force(row: np.ndarray, adr: int) -> float:
+    """A contact sensor's summed normal force: its SENSOR_SLOTS slots' second entries, summed in
+    numpy's order (contact_sensor_force bit for bit)."""
+    return pairwise_sum(row[adr + 1:adr + 4 * SENSOR_SLOTS:4])
+
+
+@njit(cache=True)
+def _region_forces(rows, region_adr, bone_adr, bone_region, bone_starts, n_regions):
+    """SensorLayout.region_forces of W worlds' sensordata rows, compiled: (skin + bone, bone);
+    a region's bones are summed as np.add.reduceat does (the first, plus the rest pairwise)."""
+    worlds = rows.shape[0]
+    total = np.empty((worlds, n_regions))
+    bone = np.zeros((worlds, n_regions))
+    per_bone = np.empty(bone_adr.size)
+    for w in range(worlds):
+        row = rows[w]
+        for k in range(bone_adr.size):
+            per_bone[k] = _slots_force(row, bone_adr[k])
+        for j in range(bone_starts.size):
+            start = bone_starts[j]
+            end = bone_starts[j + 1] if j + 1 < bone_starts.size else bone_adr.size
+            bone[w, bone_region[start]] = per_bone[start] + pairwise_sum(per_bone[start + 1:end])
+        for i in range(n_regions):
+            total[w, i] = _slots_force(row, region_adr[i]) + bone[w, i]
+    return total, bone
+
+
+@njit(cache=True)
+def _settled(warnings, qpos, qvel) -> bool:
+    """No MuJoCo warning was counted and the state is finite."""
+    for n in warnings:
+        if n:
+            return False
+    for x in qpos:
+        if not math.isfinite(x):
+            return False
+    for x in qvel:  # noqa: SIM110 (numba compiles the loop, not a generator in all())
+        if not math.isfinite(x):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _saturated(rows, found_adr):
+    out = np.zeros(rows.shape[0], np.int64)
+    for w in range(rows.shape[0]):
+        for adr in found_adr:
+            out[w] += rows[w, adr] > SENSOR_SLOTS
+    return out
+
+
+@njit(cache=True)
+def _feel(rows, feel_adr):
+    """SensorLayout.feel of W worlds' sensordata rows: the norm of each net force, as
+    np.linalg.norm sums its squares."""
+    out = np.empty((rows.shape[0], feel_adr.size))
+    for w in range(rows.shape[0]):
+        for k in range(feel_adr.size):
+            x, y, z = rows[w, feel_adr[k] + 1], rows[w, feel_adr[k] + 2], rows[w, feel_adr[k] + 3]
+            out[w, k] = math.sqrt((x * x + y * y) + z * z)
+    return out
 
 
 def diagnose(m: mujoco.MjModel, d: mujoco.MjData, t: float) -> Divergence:

@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from softhand.compiled import count_above, within
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import check_partner_size, check_reset_options
 from softhand.envs.physics import MujocoPhysics
@@ -58,6 +59,14 @@ def mount_path(scenario: Scenario, dt: float, frame_skip: int) -> np.ndarray:
     feedback from the contacts), one action period past its end; shape (steps, 3)."""
     n_steps = int(np.ceil(scenario.duration_s / dt)) + frame_skip
     return scenario.mount_path(np.arange(n_steps) * dt)
+
+
+def _span(index: np.ndarray) -> slice | np.ndarray:
+    """``index`` as a slice when its entries are consecutive (the same entries), else as is."""
+    index = np.asarray(index)
+    if index.size and np.array_equal(index, np.arange(index[0], index[0] + index.size)):
+        return slice(int(index[0]), int(index[0]) + index.size)
+    return index
 
 
 def default_frame_skip(timestep_s: float) -> int:
@@ -191,6 +200,10 @@ class TwoHandTouchEnv(gym.Env):
         #: actuator ids of the partner's digit servos, in PARTNER_JOINTS order (a scenario sets them)
         self.partner_servos = np.array(hum[:len(PARTNER_JOINTS)])
         self._ctrl, self._qpos, self._qvel = self.physics.ctrl, self.physics.qpos, self.physics.qvel
+        # what a step reads and writes, as slices where the addresses are consecutive (as in
+        # every scene built here): numpy takes a slice without an index array or a copy
+        self._q_at, self._v_at = _span(self._pro_qpos), _span(self._pro_dof)
+        self._act_at, self._servo_at = _span(self._pro_act), _span(self.partner_servos)
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         #: the law of every skin pair, and why (softhand.envs.skins.pair_choices)
         self.pair_laws = pair_choices(m, self.skins, self.representations, directory=directory,
@@ -271,8 +284,7 @@ class TwoHandTouchEnv(gym.Env):
             raise ValueError(f"action {show(action)} is outside the action space: 6 finite real "
                              f"values in [-1, 1] (got dtype {raw.dtype})")
         a = raw.astype(np.float64, copy=False)
-        # min/max are nan when any entry is: one comparison catches both
-        if a.shape != (6,) or not (a.min() >= -1.0 - 1e-6 and a.max() <= 1.0 + 1e-6):
+        if a.shape != (6,) or not within(a, -1.0 - 1e-6, 1.0 + 1e-6):  # NaN is not within
             got = f" (got shape {a.shape})" if a.shape != (6,) else ""
             raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
                              f"space: 6 finite values in [-1, 1]{got}")
@@ -285,16 +297,17 @@ class TwoHandTouchEnv(gym.Env):
         ctrl, opt = self._ctrl, self.model.opt
         t = physics.time
         if self.hand == "human":  # the relaxed hand follows the scenario; the action is unused
-            ctrl[self._pro_act] = scenario.sensored_targets(t)
+            ctrl[self._act_at] = scenario.sensored_targets(t)
         else:
-            ctrl[self._pro_act] = a * self._max_speed
+            ctrl[self._act_at] = a * self._max_speed
         # the partner's digits act once per action step (100 Hz by default), the arm every step
-        ctrl[self.partner_servos] = scenario.partner_targets(t, physics.partner_feel(),
+        ctrl[self._servo_at] = scenario.partner_targets(t, physics.partner_feel(),
                                                         opt.timestep * self.frame_skip)
-        k, last = self._step_index, len(self._mount) - 1
+        k, mount = self._step_index, self._mount
         end = k + self.frame_skip
         # None, or why the physics diverged (MuJoCo reset itself, warned, or went non-finite)
-        diverged = physics.advance(self._mount[np.minimum(np.arange(k, end), last)])
+        diverged = physics.advance(mount[k:end] if end <= len(mount) else
+                                   mount[np.minimum(np.arange(k, end), len(mount) - 1)])
         self._step_index = end
         unstable = diverged is not None
         if not unstable:  # a diverged step keeps the last good forces and readings
@@ -380,6 +393,7 @@ class TwoHandTouchEnv(gym.Env):
     def _reset_range_counts(self) -> None:
         """Zero the episode's counts of contacts beyond their calibrated range."""
         self._beyond = 0  # pair contacts beyond range at this step
+        self._bottomed = 0  # regions whose bone bottomed out at this step
         self._beyond_N: dict[str, float] = {}  # pair -> its force (N) at this step, if beyond
         self._episode_steps = 0
         self._beyond_steps = 0  # pair contacts beyond range, summed over the episode's steps
@@ -396,7 +410,10 @@ class TwoHandTouchEnv(gym.Env):
         self._beyond_N = {}
         self._episode_steps += 1
         self._beyond_steps += self._beyond
-        self._bone_steps += int((self._bone > 0).sum())
+        self._bottomed = count_above(self._bone, 0.0)  # regions whose bone bottomed out
+        self._bone_steps += self._bottomed
+        if not self._beyond:
+            return
         for (g1, g2), f, lim in zip(geoms.tolist(), force.tolist(), top.tolist(), strict=True):
             name = self._pair_name[(min(g1, g2), max(g1, g2))]
             self._beyond_N[name] = max(f, self._beyond_N.get(name, 0.0))
@@ -451,8 +468,8 @@ class TwoHandTouchEnv(gym.Env):
     def _obs(self) -> np.ndarray:
         n = self._pro_qpos.size
         obs = np.empty(self._n_obs)
-        obs[:n] = self._qpos[self._pro_qpos]
-        obs[n:2 * n] = self._qvel[self._pro_dof]
+        obs[:n] = self._qpos[self._q_at]
+        obs[n:2 * n] = self._qvel[self._v_at]
         obs[2 * n:-1] = region_values(self.observe, {
             "sensor_patch": self._readings, "region_load": self._forces,
             "load_estimate": self._estimate})
@@ -468,7 +485,7 @@ class TwoHandTouchEnv(gym.Env):
                 "phase": phase, "reward_terms": terms, "time_s": float(self.data.time),
                 "saturated_sensors": self._saturated,
                 "thumb_rotation_rad": float(self._qpos[self.thumb_rotation_qpos]),
-                "contacts_beyond_range": self._beyond + int((self._bone > 0).sum()),
+                "contacts_beyond_range": self._beyond + self._bottomed,
                 "pairs_beyond_range_N": dict(self._beyond_N),
                 "region_bone_N": dict(zip(names, self._bone.tolist(), strict=True)),
                 **self.scenario.info()}

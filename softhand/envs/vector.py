@@ -395,7 +395,7 @@ class HandshakeVectorEnv(VectorEnv):
                 "time_s": self.physics.time if time_s is None else time_s,
                 "saturated_sensors": self._saturated.copy(),
                 "thumb_rotation_rad": self.physics.qpos(self._thumb)[:, 0],
-                "contacts_beyond_range": np.array([e._beyond + int((e._bone > 0).sum())
+                "contacts_beyond_range": np.array([e._beyond + e._bottomed
                                                    for e in self.envs]),
                 "pairs_beyond_range_N": np.array([dict(e._beyond_N) for e in self.envs],
                                                  dtype=object),

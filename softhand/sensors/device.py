@@ -39,6 +39,7 @@ from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from softhand.laws.elastic import MonotoneInverse
 from softhand.sensors.transfer import TransferLaw
@@ -116,8 +117,8 @@ ASSUMPTIONS = {
 
 
 class _Share:
-    """A share spline g(u) tabulated at 0.001 N steps and interpolated linearly (one np.interp
-    per law and env step: the B-spline costs about 50 us for the env's 18 loads); the table's
+    """A share spline g(u) tabulated at 0.001 N steps, interpolated linearly by the bank's
+    compiled kernels (the B-spline costs about 50 us for the env's 18 loads); the table's
     error, h^2/8 max|g''|, is below 1e-5 N for every shipped law (4e-6 N measured; a test), far under a 10-bit
     quantum (0.043 N). 0 for u <= 0, linear past the fitted range (as `ElasticLaw.force`)."""
 
@@ -131,12 +132,6 @@ class _Share:
         #: u at which the share reaches g (the table's monotone inverse, made once)
         self.inverse = MonotoneInverse(self.u, self.g)
 
-    def __call__(self, u: np.ndarray) -> np.ndarray:
-        out = np.interp(u, self.u, self.g, left=0.0)
-        beyond = u > self.top
-        if beyond.any():
-            out[beyond] = self.g[-1] + (u[beyond] - self.top) * self.k_top
-        return out
 
 
 class TransferBank:
@@ -157,8 +152,10 @@ class TransferBank:
         self.c = np.zeros((n, terms))
         self.decay = np.ones((n, terms))
         self.ramp = np.zeros((n, terms))
-        self._groups: dict[int, tuple[TransferLaw, np.ndarray]] = {}
-        self._share: dict[int, _Share] = {}
+        # each law's share table (made once per law), laid end to end for the compiled kernels;
+        # per region where its table starts and ends (an empty range: an ideal sensor)
+        shares: dict[int, tuple[int, _Share]] = {}
+        self._table = np.zeros((n, 2), np.int64)
         for i, law in enumerate(laws):
             if law is None:
                 continue
@@ -167,34 +164,95 @@ class TransferBank:
             self.c[i, :k] = law.kernel.c
             d, r = law.kernel.step_factors(step_s)
             self.decay[i, :k], self.ramp[i, :k] = d, r
-            key = id(law)
-            idx = self._groups.get(key, (law, np.zeros(0, int)))[1]
-            self._groups[key] = (law, np.append(idx, i))
-            self._share.setdefault(key, _Share(law))
+            start = sum(len(sh.u) for _, sh in shares.values())
+            start, share = shares.setdefault(id(law), (start, _Share(law)))
+            self._table[i] = start, start + len(share.u)
+        tables = [sh for _, sh in shares.values()]
+        self._u = np.concatenate([sh.u for sh in tables] or [np.zeros(0)])
+        self._g = np.concatenate([sh.g for sh in tables] or [np.zeros(0)])
+        self._g_inverse = np.concatenate([sh.inverse.f for sh in tables] or [np.zeros(0)])
+        self._top = np.array([0.0 if law is None else law.share.max_mm for law in laws])
+        self._k_top = np.array([0.0 if law is None else law.share.end_stiffness for law in laws])
         self.reset()
 
     def reset(self) -> None:
         self.h = np.zeros_like(self.c)
         self.g = np.zeros(len(self.laws))
 
+    def share(self, load_N: np.ndarray) -> np.ndarray:
+        """Each region's static share of its load (N on the patch): its law's static curve past
+        the dead band on the law's table, 0 below it, linear past the fitted range (as
+        `ElasticLaw.force`); an ideal sensor's share is the load."""
+        return _shares(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
+                       self._top, self._k_top)
+
     def step(self, load_N: np.ndarray) -> np.ndarray:
         """Readings (N on each patch) after one env step that ends at loads ``load_N``."""
-        g = np.array(load_N, dtype=float)  # ideal regions: g = load
-        for key, (law, idx) in self._groups.items():
-            g[idx] = self._share[key](g[idx] - law.dead_band_N)
-        self.h = self.decay * self.h + self.c * self.ramp * (g - self.g)[:, None]
-        self.g = g
-        return self.k_inf * g + self.h.sum(axis=1)
+        return _step(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
+                     self._top, self._k_top, self.g, self.h, self.decay, self.c, self.ramp,
+                     self.k_inf)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
         """The load a calibrated read-out infers from each reading: the static share inverted on
         its table (a reading of 0 gives 0: a dead band cannot be seen into; past the fitted range,
         the table's end)."""
-        out = np.array(reading_N, dtype=float)
-        for key, (law, idx) in self._groups.items():
-            share, r = self._share[key], out[idx]
-            out[idx] = np.where(r > 0, share.inverse(r) + law.dead_band_N, 0.0)
-        return out
+        return _estimate(np.asarray(reading_N, float), self.dead, self._table, self._u,
+                         self._g_inverse)
+
+
+@njit(cache=True)
+def _shares(load, dead, table, u, g, top, k_top):
+    """Each region's static share of its load: `_Share` of (load - dead band) on its law's
+    table (np.interp, 0 below the table, linear past it); an ideal sensor's is the load."""
+    out = load.copy()
+    for i in range(load.size):
+        a, b = table[i]
+        if a == b:
+            continue
+        x = load[i] - dead[i]
+        if x < u[a]:
+            out[i] = 0.0
+        elif x > top[i]:
+            out[i] = g[b - 1] + (x - top[i]) * k_top[i]
+        else:
+            out[i] = np.interp(x, u[a:b], g[a:b])
+    return out
+
+
+@njit(cache=True)
+def _step(load, dead, table, u, g, top, k_top, g_last, h, decay, c, ramp, k_inf):
+    """TransferBank.step in one compiled call: `_shares`, then `_relax`."""
+    return _relax(_shares(load, dead, table, u, g, top, k_top), g_last, h, decay, c, ramp,
+                  k_inf)
+
+
+@njit(cache=True)
+def _relax(g, g_last, h, decay, c, ramp, k_inf):
+    """One env step of the QLV kernels: updates the branch states ``h`` and the last shares
+    ``g_last`` in place, returns the readings (the branches summed in numpy's order)."""
+    out = np.empty(g.size)
+    for i in range(g.size):
+        dg = g[i] - g_last[i]
+        total = 0.0
+        for j in range(h.shape[1]):
+            h[i, j] = decay[i, j] * h[i, j] + c[i, j] * ramp[i, j] * dg
+            total += h[i, j]
+        g_last[i] = g[i]
+        out[i] = k_inf[i] * g[i] + total
+    return out
+
+
+@njit(cache=True)
+def _estimate(reading, dead, table, u, g_inverse):
+    """TransferBank.load_estimate, compiled: np.interp on each law's monotone inverse."""
+    out = reading.copy()
+    for i in range(reading.size):
+        a, b = table[i]
+        if a == b:
+            continue
+        r = reading[i]
+        out[i] = np.interp(r, g_inverse[a:b], u[a:b]) + dead[i] if r > 0 else 0.0
+    return out
 
 
 class SensorChain:
@@ -227,11 +285,27 @@ class SensorChain:
             self._play = np.clip(self._play, r - half, r + half)
             r = self._play
         if self._k % self._period == 0:
-            x = r + (self.rng.normal(0.0, s.noise_N, r.shape) if s.noise_N > 0 else 0.0)
-            x = np.where(x < s.threshold_N, 0.0, np.minimum(x, s.full_scale_N))  # no tension
-            if s.resolution_N > 0:
-                x = np.round(x / s.resolution_N) * s.resolution_N
-            self._queue.append((self._k + self._lag, x))
+            noise = self.rng.normal(0.0, s.noise_N, r.shape) if s.noise_N > 0 else _NO_NOISE
+            self._queue.append((self._k + self._lag, _sample(r, noise, s.threshold_N,
+                                                              s.full_scale_N, s.resolution_N)))
         while self._queue and self._queue[0][0] <= self._k:
             self.reading = self._queue.pop(0)[1]
         return self.reading
+
+
+_NO_NOISE = np.zeros(0)
+
+
+@njit(cache=True)
+def _sample(reading, noise, threshold_N, full_scale_N, resolution_N):
+    """One sample of the readings: plus the noise (if drawn), 0 below the threshold (a thin film
+    reads no tension), clipped to full scale, rounded to the quantum (half to even, as
+    np.round)."""
+    out = reading.copy()
+    for i in range(out.size):
+        x = out[i] + noise[i] if noise.size else out[i]
+        x = 0.0 if x < threshold_N else (x if x != x else min(x, full_scale_N))
+        if resolution_N > 0:
+            x = np.rint(x / resolution_N) * resolution_N
+        out[i] = x
+    return out

@@ -18,7 +18,9 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+from numba import njit
 
+from softhand.compiled import pairwise_sum, row_sums
 from softhand.envs.partner import (
     GRIP_FORCE_N,
     GRIP_PHALANGES,
@@ -67,6 +69,7 @@ class HandshakeScenario(Scenario):
     def __init__(self, *, squeeze: float = 1.0, overload_N: float = 10.0,
                  reward_weights: Mapping[str, float] | None = None,
                  randomize: bool = True) -> None:
+        self._phase_row = {p: np.array([i]) for i, p in enumerate(self.phases)}
         self.squeeze = check_number("squeeze", squeeze, lo=0.0, hi=MAX_SQUEEZE, lo_open=True,
                                     why=f"(above {MAX_SQUEEZE:g} the partner's grip is at its "
                                         "limit: softhand.envs.partner.MAX_SQUEEZE)")
@@ -151,9 +154,9 @@ class HandshakeScenario(Scenario):
 
     def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,
                      phase: str) -> dict[str, float]:
-        terms = self.world.reward_terms(np.asarray(forces_N)[None], np.asarray(action)[None],
-                                        np.array([self.phases.index(phase)]))
-        return {k: float(v[0]) for k, v in terms.items()}
+        terms = self.world.reward_table(np.asarray(forces_N, float)[None],
+                                        np.asarray(action, float)[None], self._phase_row[phase])
+        return dict(zip(self.reward_keys, terms[0].tolist(), strict=True))
 
     def info(self) -> dict[str, Any]:
         return {"partner_grip_N": self.script.grip_force_N if self.script else None,
@@ -163,24 +166,38 @@ class HandshakeScenario(Scenario):
                 "grasp_thumb_rotation_rad": self.thumb_rotation_rad}
 
 
-def handshake_reward(forces_N: np.ndarray, action: np.ndarray, engaged: np.ndarray,
-                     target_N: np.ndarray, weights: np.ndarray,
-                     overload_N: np.ndarray) -> dict[str, np.ndarray]:
-    """The reward's terms (module docstring) of W worlds: ``forces_N`` (W, regions), ``action``
-    (W, 6), ``engaged`` (W,) whether the hands hold each other, ``target_N`` (W,) the partner's
-    grip per phalanx, ``weights`` (W, 4) in DEFAULT_REWARD_WEIGHTS order, ``overload_N`` (W,).
-    Returns each term, shape (W,)."""
-    f = forces_N
-    w = {k: weights[:, i] for i, k in enumerate(DEFAULT_REWARD_WEIGHTS)}
-    over = np.maximum(f - overload_N[:, None], 0.0)
-    touched = f > CONTACT_N
-    count = touched.sum(axis=1)
-    mean = np.where(touched, f, 0.0).sum(axis=1) / np.maximum(count, 1)
-    grip = -w["grip"] * ((mean - target_N) / target_N) ** 2
-    contact = w["contact"] * count / f.shape[1]
-    return {"grip": np.where(engaged, grip, 0.0), "contact": np.where(engaged, contact, 0.0),
-            "overload": -w["overload"] * (over * over).sum(axis=1),
-            "effort": -w["effort"] * (action * action).sum(axis=1)}
+@njit(cache=True)
+def handshake_reward(forces_N, action, phase, grip_N, weights, overload_N):
+    """The reward's terms (module docstring) of W worlds, compiled: ``forces_N`` (W, regions),
+    ``action`` (W, 6), ``phase`` (W,) each world's index in PHASES (the grip and contact terms
+    count while the hands hold each other: grip and shake), ``grip_N`` (W,) the partner's summed
+    grip target (its grip per phalanx times GRIP_PHALANGES), ``weights`` (W, 4) in
+    DEFAULT_REWARD_WEIGHTS order, ``overload_N`` (W,). Returns the terms (W, 4) in that order.
+    Sums go in numpy's order (pairwise_sum), as the numpy code this replaced, bit for bit."""
+    worlds, regions = forces_N.shape
+    out = np.zeros((worlds, 4))
+    over2 = np.empty(regions)
+    held = np.empty(regions)
+    for w in range(worlds):
+        count = 0
+        for i in range(regions):
+            f = forces_N[w, i]
+            over = max(f - overload_N[w], 0.0)
+            over2[i] = over * over
+            touched = f > CONTACT_N
+            count += touched
+            held[i] = f if touched else 0.0
+        if phase[w] == _GRIP or phase[w] == _SHAKE:
+            target = grip_N[w] / GRIP_PHALANGES  # per phalanx
+            x = (pairwise_sum(held) / max(count, 1) - target) / target
+            out[w, 0] = -weights[w, 0] * (x * x)
+            out[w, 1] = weights[w, 1] * count / regions
+        out[w, 2] = -weights[w, 2] * pairwise_sum(over2)
+        out[w, 3] = -weights[w, 3] * pairwise_sum(action[w] * action[w])
+    return out
+
+
+_GRIP, _SHAKE = PHASES.index("grip"), PHASES.index("shake")
 
 
 class HandshakeWorlds:
@@ -218,7 +235,7 @@ class HandshakeWorlds:
     def partner_targets(self, t: np.ndarray, feel_N: np.ndarray, dt: float) -> np.ndarray:
         """The partner's digit targets (W, servos) from the net force on each of its phalanges
         (``feel_N``, (W, phalanges))."""
-        self.grip_measured_N = feel_N.sum(axis=1)  # what the partner's digits press
+        self.grip_measured_N = row_sums(feel_N)  # what the partner's digits press
         return self.script.grips(t, self.grip_measured_N, dt)
 
     def sensored_targets(self, t: np.ndarray) -> np.ndarray:
@@ -230,7 +247,12 @@ class HandshakeWorlds:
 
     def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,
                      phase: np.ndarray) -> dict[str, np.ndarray]:
-        engaged = (phase == PHASES.index("grip")) | (phase == PHASES.index("shake"))
-        return handshake_reward(forces_N, action, engaged,
-                                self.script.grip_forces_N / GRIP_PHALANGES, self.weights,
-                                self.overload_N)
+        """Each world's reward terms (term -> (W,)) at its ``phase`` (W,) index in PHASES."""
+        terms = self.reward_table(forces_N, action, phase)
+        return {k: terms[:, i] for i, k in enumerate(DEFAULT_REWARD_WEIGHTS)}
+
+    def reward_table(self, forces_N: np.ndarray, action: np.ndarray,
+                     phase: np.ndarray) -> np.ndarray:
+        """`reward_terms` as one (W, 4) array, in DEFAULT_REWARD_WEIGHTS order."""
+        return handshake_reward(forces_N, action, phase, self.script.grip_forces_N,
+                                self.weights, self.overload_N)
