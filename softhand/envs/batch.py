@@ -34,7 +34,6 @@ diverged world is never stepped again until it is reset.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Sequence
 
@@ -42,7 +41,13 @@ import mujoco
 import numpy as np
 from mujoco import batch as mjbatch
 
-from softhand.envs.physics import Divergence, SensorLayout, contacts_above, diagnose
+from softhand.envs.physics import (
+    Divergence,
+    SensorLayout,
+    contacts_above,
+    diagnose,
+    settled_rows,
+)
 
 __all__ = ["BatchPhysics", "layout_key"]
 
@@ -72,7 +77,9 @@ class _Group:
         self.mocap_pos, self.mocap_quat = b.bind("mocap_pos"), b.bind("mocap_quat")
         self.sensordata = b.bind("sensordata")
         self.ncon = b.bind("ncon")  # contacts per world, without copying its data
+        self.warning = np.asarray(b.warning)  # (nsim, mjNWARNING, 2): last info, count (a view)
         self.scratch = mujoco.MjData(models[0])  # get_data's target (a new MjData costs ~1 ms)
+        self.every = np.arange(len(worlds))
         self.sensors_on = True  # the models as compiled
 
     def sensors(self, on: bool) -> None:
@@ -122,6 +129,9 @@ class BatchPhysics:
                 ms[0], region_sensors, feel_sensors, bone_sensors)))
         self._mocap = np.array([m.body(mocap_body).mocapid[0] for m in self.models])
         self._timestep = np.array([m.opt.timestep for m in self.models])
+        for g in self.groups:  # per Batch, by its local ids
+            g.mocap, g.timestep = self._mocap[g.worlds], self._timestep[g.worlds]
+        self._index_cache: dict[int, tuple[np.ndarray, list]] = {}
         #: why each world's last `advance` diverged (None: it did not)
         self.divergence: list[Divergence | None] = [None] * self.num_worlds
 
@@ -133,11 +143,31 @@ class BatchPhysics:
             out[g.worlds] = g.time
         return out
 
+    def _columns(self, index: np.ndarray) -> list[np.ndarray | slice]:
+        """Per Batch, the columns of ``index`` (W, k) for its worlds: one row (a slice when
+        consecutive) where every world of the Batch has the same entries (one scene), else
+        the rows. Kept per index array (the vector env passes the same ones every step)."""
+        known = self._index_cache.get(id(index))
+        if known is not None and known[0] is index:
+            return known[1]
+        cols = []
+        for g in self.groups:
+            rows = index[g.worlds]
+            if (rows == rows[0]).all():
+                first = rows[0]
+                consecutive = first.size and (np.diff(first) == 1).all()
+                cols.append(slice(int(first[0]), int(first[-1]) + 1) if consecutive else first)
+            else:
+                cols.append(rows)
+        self._index_cache[id(index)] = (index, cols)
+        return cols
+
     def _gather(self, field: str, index: np.ndarray) -> np.ndarray:
         out = np.empty(index.shape)
-        for g in self.groups:
+        for g, cols in zip(self.groups, self._columns(index), strict=True):
             rows = getattr(g, field)
-            out[g.worlds] = np.take_along_axis(rows, index[g.worlds], axis=1)
+            out[g.worlds] = (np.take_along_axis(rows, cols, axis=1)
+                             if isinstance(cols, np.ndarray) and cols.ndim == 2 else rows[:, cols])
         return out
 
     def qpos(self, index: np.ndarray) -> np.ndarray:
@@ -150,8 +180,12 @@ class BatchPhysics:
 
     def set_ctrl(self, index: np.ndarray, values: np.ndarray) -> None:
         """Controls ``index[w]`` (actuator ids, (W, k)) of world w to ``values[w]``."""
-        for g in self.groups:
-            np.put_along_axis(g.ctrl, np.asarray(index)[g.worlds], values[g.worlds], axis=1)
+        index = np.asarray(index)
+        for g, cols in zip(self.groups, self._columns(index), strict=True):
+            if isinstance(cols, np.ndarray) and cols.ndim == 2:
+                np.put_along_axis(g.ctrl, cols, values[g.worlds], axis=1)
+            else:
+                g.ctrl[:, cols] = values[g.worlds]
 
     def data(self, world: int) -> mujoco.MjData:
         """World ``world``'s MjData after its last call: a copy (contacts, forces, sensors) into
@@ -188,23 +222,27 @@ class BatchPhysics:
             for i in range(self.frame_skip):
                 last = i == self.frame_skip - 1
                 for g in self.groups:
-                    ids = np.flatnonzero(live[g.worlds])
-                    if not ids.size:
-                        continue
+                    mine = live[g.worlds]
+                    if mine.all():  # every world of the Batch: no ids for it to check
+                        ids, step_ids = g.every, None
+                    else:
+                        ids = step_ids = np.flatnonzero(mine)
+                        if not ids.size:
+                            continue
                     worlds = g.worlds[ids]
-                    g.mocap_pos[ids, self._mocap[worlds]] = mount_paths[worlds, i]
-                    t = g.time[ids].copy()
+                    g.mocap_pos[ids, g.mocap[ids]] = mount_paths[worlds, i]
+                    t = g.time[ids]  # a copy (an index array)
                     last_good[worlds] = t
                     g.sensors(on=last)  # off for the frame's first steps, on for its last
                     try:
-                        g.batch.step(ids)
+                        g.batch.step(step_ids)
                     except mjbatch.SimulationError as exc:  # MuJoCo raised an error in these worlds
                         for j in exc.ids:
                             w = int(g.worlds[j])
                             self.divergence[w] = Divergence(float(last_good[w]),
                                                             f"MuJoCo error: {g.batch.error(j)}")
                             live[w] = False
-                    reset = g.time[ids] < t + 0.5 * self._timestep[worlds]  # MuJoCo reset the data
+                    reset = g.time[ids] < t + 0.5 * g.timestep[ids]  # MuJoCo reset the data
                     for j, w in zip(ids[reset], worlds[reset], strict=True):
                         if live[w]:
                             self.divergence[w] = diagnose(
@@ -217,9 +255,8 @@ class BatchPhysics:
             ids = np.flatnonzero(live[g.worlds])
             if not ids.size:
                 continue
-            warned = np.asarray(g.batch.warning)[ids, :, 1].any(axis=1)
-            finite = np.array([math.isfinite(g.qpos[j].sum() + g.qvel[j].sum()) for j in ids])
-            for j in ids[warned | ~finite]:
+            settled = settled_rows(g.warning[:, :, 1], g.qpos, g.qvel, ids)
+            for j in ids[~settled]:
                 w = int(g.worlds[j])
                 self.divergence[w] = diagnose(self.models[w], self.data(int(g.worlds[j])),
                                               float(g.time[j]))

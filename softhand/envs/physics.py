@@ -40,7 +40,7 @@ from softhand.compiled import pairwise_sum
 from softhand.hands.skeleton import SENSOR_SLOTS
 
 __all__ = ["Divergence", "DivergenceError", "MujocoPhysics", "SensorLayout", "contacts_above",
-           "diagnose", "mujoco_warnings_kept"]
+           "diagnose", "mujoco_warnings_kept", "settled_rows"]
 
 _NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 _W = mujoco.mjtWarning
@@ -321,6 +321,17 @@ def _settled(warnings, qpos, qvel) -> bool:
         if not math.isfinite(x):
             return False
     return True
+
+
+@njit(cache=True)
+def settled_rows(warnings, qpos, qvel, rows):
+    """`_settled` of each of the worlds ``rows``: ``warnings`` (W, mjNWARNING) counts, ``qpos``
+    (W, nq), ``qvel`` (W, nv)."""
+    out = np.empty(rows.size, np.bool_)
+    for k in range(rows.size):
+        w = rows[k]
+        out[k] = _settled(warnings[w], qpos[w], qvel[w])
+    return out
 
 
 @njit(cache=True)

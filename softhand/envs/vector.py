@@ -218,6 +218,8 @@ class HandshakeVectorEnv(VectorEnv):
         self._max_speed = np.array([e._max_speed for e in self.envs])
         self._human = np.array([e.hand == "human" for e in self.envs])
         self._thumb = np.array([[e.thumb_rotation_qpos] for e in self.envs])
+        # the partner's grip acts once per action period (the first world's, as the single env)
+        self._action_period_s = float(first.model.opt.timestep) * self.frame_skip
         self._duration = np.ones(n)
         self._step_index = np.zeros(n, int)
         self._mounts: list[np.ndarray] = [np.zeros((1, 3))] * n
@@ -265,17 +267,20 @@ class HandshakeVectorEnv(VectorEnv):
             raise ValueError(f"actions of shape {a.shape}: expected ({n}, 6) finite values in "
                              "[-1, 1], one row per world")
         phys, worlds = self.physics, self._worlds
-        dt = np.array([e.model.opt.timestep for e in self.envs])
         t = phys.time
-        ctrl = np.where(self._human[:, None], worlds.sensored_targets(t), a * self._max_speed)
+        ctrl = a * self._max_speed
+        if self._human.any():  # the relaxed hands follow the scenario; their actions are unused
+            ctrl = np.where(self._human[:, None], worlds.sensored_targets(t), ctrl)
         phys.set_ctrl(self._pro_act, ctrl)
         # the partner's digits act once per action step, the arm every step
-        targets = worlds.partner_targets(t, phys.partner_feel(), dt[0] * self.frame_skip)
+        targets = worlds.partner_targets(t, phys.partner_feel(), self._action_period_s)
         phys.set_ctrl(self._servos, targets)
         paths = np.empty((n, self.frame_skip, 3))
         for w in range(n):
             k, mount = self._step_index[w], self._mounts[w]
-            paths[w] = mount[np.minimum(np.arange(k, k + self.frame_skip), len(mount) - 1)]
+            end = k + self.frame_skip
+            paths[w] = mount[k:end] if end <= len(mount) else \
+                mount[np.minimum(np.arange(k, end), len(mount) - 1)]
         live = ~self._ended  # worlds waiting for a reset (AutoresetMode.DISABLED) stand still
         diverged = phys.advance(live, paths)
         self._step_index[live] += self.frame_skip
