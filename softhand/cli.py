@@ -76,6 +76,7 @@ from softhand.cli_inputs import (
     sensor_spec_of,
     with_options,
 )
+from softhand.io import DeferredInterrupt
 from softhand.paper import paper
 from softhand.paths import FE_DIR, REPORTS_DIR, SENSORS_DIR, SKINS_DIR, is_shipped
 
@@ -108,8 +109,9 @@ class _Softhand(click.Group):
             click.echo(("" if isinstance(exc, Stopped) else "error: ") + exc.format_message(),
                        err=True)
             sys.exit(exc.exit_code)
-        except (click.Abort, KeyboardInterrupt):
-            _interrupted()
+        except (click.Abort, KeyboardInterrupt) as exc:
+            # click turns a KeyboardInterrupt into Abort, from it
+            _interrupted(written=isinstance(exc.__cause__ or exc, DeferredInterrupt))
         except Exception as exc:
             if _caused_by_interrupt(exc):  # e.g. Ctrl-C during a lazy import, wrapped by it
                 _interrupted()
@@ -140,10 +142,14 @@ def _caused_by_interrupt(exc: BaseException) -> bool:
     return False
 
 
-def _interrupted() -> NoReturn:
-    """Ctrl-C: one line, exit 130; a second Ctrl-C while exiting is ignored."""
+def _interrupted(written: bool = False) -> NoReturn:
+    """Ctrl-C: one line, exit 130; a second Ctrl-C while exiting is ignored. ``written``: the
+    Ctrl-C came while the results that had finished were being written, and was held until they
+    were (softhand.io.interrupts_deferred)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    click.echo(f"interrupted ({_STOP['by']}); nothing was written", err=True)
+    click.echo(f"interrupted ({_STOP['by']}) while writing: what had finished was written, each "
+               "file whole" if written else f"interrupted ({_STOP['by']}); nothing was written",
+               err=True)
     sys.stdout.flush()
     sys.exit(EXIT_INTERRUPTED)
 

@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["Staged", "atomic_open", "atomic_write_json", "atomic_write_text", "check_free_space",
+__all__ = ["DeferredInterrupt", "Staged", "atomic_open", "atomic_write_json", "atomic_write_text", "check_free_space",
            "check_writable_dir", "check_writable_file", "interrupts_deferred", "read_json",
            "staged_folder"]
 
@@ -238,10 +238,15 @@ def staged_folder(target: str | os.PathLike, *, stage: bool) -> Iterator[Staged]
         shutil.rmtree(holder, ignore_errors=True)
 
 
+class DeferredInterrupt(KeyboardInterrupt):
+    """A Ctrl-C held by `interrupts_deferred` until its block had finished: what the block
+    wrote is complete (the command line says so, instead of "nothing was written")."""
+
+
 @contextlib.contextmanager
 def interrupts_deferred() -> Iterator[None]:
-    """Hold Ctrl-C (SIGINT) until the block ends, then raise it: files written together stay
-    consistent. Outside the main thread the block runs as it is."""
+    """Hold Ctrl-C (SIGINT) until the block ends, then raise it (`DeferredInterrupt`): files
+    written together stay consistent. Outside the main thread the block runs as it is."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -252,4 +257,4 @@ def interrupts_deferred() -> Iterator[None]:
     finally:
         signal.signal(signal.SIGINT, previous)
     if caught:
-        raise KeyboardInterrupt
+        raise DeferredInterrupt

@@ -165,3 +165,32 @@ def test_sigterm_to_the_command_alone_stops_its_workers_too(tmp_path):
         time.sleep(0.05)
     left = _session_processes(proc.pid)
     assert left == [], [_cmdline(pid) for pid in left]
+
+
+def test_a_ctrl_c_held_while_writing_says_the_files_were_written(tmp_path):
+    """A Ctrl-C during a write block (softhand.io.interrupts_deferred) waits for the block, and
+    the line says that what finished was written, not "nothing was written"."""
+    script = textwrap.dedent(f"""
+        import os, signal, click
+        from softhand.cli import _Softhand
+        from softhand.io import atomic_write_text, interrupts_deferred
+
+        group = _Softhand()
+
+        @group.command()
+        def write():
+            with interrupts_deferred():
+                os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C in the middle of the writes
+                atomic_write_text({str(tmp_path / "a.txt")!r}, "a")
+                atomic_write_text({str(tmp_path / "b.txt")!r}, "b")
+            atomic_write_text({str(tmp_path / "after.txt")!r}, "never")
+
+        group.main(["write"])
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=HANG_S)
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == (
+        "interrupted (Ctrl-C) while writing: what had finished was written, each file whole")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+    assert "Traceback" not in proc.stderr
