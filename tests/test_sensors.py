@@ -397,3 +397,30 @@ def test_sensors_calibrate_fit_only_writes_the_same_laws(tmp_path):
         assert a.dead_band_N == pytest.approx(b.dead_band_N, abs=1e-9)
         np.testing.assert_allclose(a.share.coefficients, b.share.coefficients, rtol=1e-6,
                                    atol=1e-9)
+
+
+def test_a_stacked_chain_is_each_worlds_own_chain():
+    """SensorChain.stack (the vector env's sensors): every world reads what its own one-world
+    chain reads, bit for bit, with its own noise stream, worlds standing still (a mask) and reset
+    apart, under hysteresis and a latency longer than the sampling period."""
+    law = next(v for (d, p), v in LAWS.items() if p == "pocket-floor")
+    other = LAWS[("solid-pu", "bone")]
+    spec = replace(FLEXIFORCE_A101, hysteresis_pct=4.0, period_s=0.02, latency_s=0.05)
+    rng = np.random.default_rng(11)
+    worlds = [SensorChain([law, other, None], spec, 0.01) for _ in range(3)]
+    for w, c in enumerate(worlds):
+        c.reset(np.random.default_rng(100 + w))
+    stacked = SensorChain.stack([SensorChain([law, other, None], spec, 0.01) for _ in range(3)])
+    for w in range(3):
+        stacked.reset(np.random.default_rng(100 + w), w)
+    for k in range(200):
+        loads = np.abs(rng.normal(2.0, 1.5, (3, 3)))
+        mask = rng.uniform(size=3) > 0.2
+        if k == 120:  # world 1 starts again, the others go on
+            worlds[1].reset(np.random.default_rng(7))
+            stacked.reset(np.random.default_rng(7), 1)
+        got = stacked.step(loads, worlds=mask)
+        for w in np.flatnonzero(mask):
+            np.testing.assert_array_equal(got[w], worlds[w].step(loads[w]))
+        np.testing.assert_array_equal(stacked.readings, [c.readings[0] for c in worlds])
+    assert (stacked.readings > 0).any(axis=1).all()  # every world reads a load

@@ -14,9 +14,9 @@ How it is built (one place for each concept):
 * the partner's script and grip regulator, the relaxed sensored hand, the phases and the reward
   are `HandshakeWorlds`, over arrays of worlds, which
   the single env runs with one world;
-* the embedded sensors' electronics are each world's own
-  `SensorChain`, stepped world by world (its noise stream is the
-  world's; softhand.sensors keeps one world per chain);
+* the embedded sensors are one `SensorChain` of all worlds
+  (`SensorChain.stack`: each world's laws' states, noise stream and sampling clock, stepped
+  together; the single env's chain is one world of it);
 * the range check reads each world's contacts from its batch data and counts them with the
   world's env (``_check_range``), so the episode's summary and its ``CalibratedRangeWarning``
   are those of a single env.
@@ -63,6 +63,7 @@ from softhand.envs.partner import PHASES, check_reset_options
 from softhand.envs.scenarios.handshake import HandshakeWorlds
 from softhand.envs.spaces import region_values
 from softhand.envs.touch import mount_path
+from softhand.sensors.device import SensorChain
 from softhand.validate import show
 
 __all__ = ["HandshakeVectorEnv"]
@@ -228,6 +229,8 @@ class HandshakeVectorEnv(VectorEnv):
         self._readings = np.zeros_like(self._forces)
         self._estimate = np.zeros_like(self._forces)
         self._saturated = np.zeros(n, int)
+        #: the worlds' embedded sensors, one chain (each world's laws, noise and clock)
+        self._sensors = SensorChain.stack([e.sensors for e in self.envs])
         self._worlds: HandshakeWorlds | None = None
         #: worlds whose episode ended and that wait for a reset (AutoresetMode.DISABLED)
         self._ended = np.zeros(n, bool)
@@ -288,11 +291,13 @@ class HandshakeVectorEnv(VectorEnv):
         forces, bone = phys.region_forces()
         saturated = phys.saturated_sensors()
         now = phys.time
-        for w in np.flatnonzero(live & ~unstable):  # a diverged world keeps its last good values
+        ok = live & ~unstable  # a diverged world keeps its last good values
+        self._forces[ok], self._bone[ok], self._saturated[ok] = forces[ok], bone[ok], saturated[ok]
+        readings = self._sensors.step(forces, worlds=ok)
+        self._readings[ok] = readings[ok]
+        self._estimate[ok] = self._estimate_of(readings)[ok]
+        for w in np.flatnonzero(ok):
             env = self.envs[w]
-            self._forces[w], self._bone[w], self._saturated[w] = forces[w], bone[w], saturated[w]
-            self._readings[w] = env.sensors.step(forces[w])
-            self._estimate[w] = env.sensors.bank.load_estimate(self._readings[w])
             env._bone = bone[w]
             env._check_range(*phys.contacts_above(int(w), env._range), float(now[w]))
         time_s = np.array([d.time_s if d is not None else now[w]
@@ -354,9 +359,9 @@ class HandshakeVectorEnv(VectorEnv):
             self._mounts[w] = mount_path(env.scenario, dt, env.frame_skip)
             self._duration[w] = env.scenario.duration_s
             self._step_index[w] = 0
-            env.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
-            self._readings[w] = env.sensors.reading
-            self._estimate[w] = env.sensors.bank.load_estimate(self._readings[w])
+            self._sensors.reset(np.random.default_rng(int(rng.integers(2**63))), int(w))
+            self._readings[w] = self._sensors.readings[w]
+            self._estimate[w] = self._estimate_of(self._sensors.readings)[w]
             self._forces[w] = self._bone[w] = 0.0
             self._saturated[w] = 0
             env._bone = self._bone[w]
@@ -370,6 +375,10 @@ class HandshakeVectorEnv(VectorEnv):
         else:
             for w in ids:
                 self._worlds.set_world(int(w), self.envs[w].scenario)
+
+    def _estimate_of(self, readings: np.ndarray) -> np.ndarray:
+        """Every world's load estimates (W, regions) from its readings."""
+        return self._sensors.bank.load_estimate(readings.ravel()).reshape(readings.shape)
 
     def _terms(self, action: np.ndarray, time_s: np.ndarray | None = None
                ) -> dict[str, np.ndarray]:

@@ -173,11 +173,15 @@ class TransferBank:
         self._g_inverse = np.concatenate([sh.inverse.f for sh in tables] or [np.zeros(0)])
         self._top = np.array([0.0 if law is None else law.share.max_mm for law in laws])
         self._k_top = np.array([0.0 if law is None else law.share.end_stiffness for law in laws])
-        self.reset()
-
-    def reset(self) -> None:
+        self._every = np.ones(n, bool)
         self.h = np.zeros_like(self.c)
-        self.g = np.zeros(len(self.laws))
+        self.g = np.zeros(n)
+
+    def reset(self, regions: slice | np.ndarray | None = None) -> None:
+        """The QLV states of ``regions`` (default all) to rest."""
+        r = slice(None) if regions is None else regions
+        self.h[r] = 0.0
+        self.g[r] = 0.0
 
     def share(self, load_N: np.ndarray) -> np.ndarray:
         """Each region's static share of its load (N on the patch): its law's static curve past
@@ -186,11 +190,12 @@ class TransferBank:
         return _shares(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
                        self._top, self._k_top)
 
-    def step(self, load_N: np.ndarray) -> np.ndarray:
-        """Readings (N on each patch) after one env step that ends at loads ``load_N``."""
+    def step(self, load_N: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
+        """Readings (N on each patch) after one env step that ends at loads ``load_N``; with
+        ``active`` (a mask of the regions), the others keep their states (and read 0 here)."""
         return _step(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
                      self._top, self._k_top, self.g, self.h, self.decay, self.c, self.ramp,
-                     self.k_inf)
+                     self.k_inf, self._every if active is None else active)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
         """The load a calibrated read-out infers from each reading: the static share inverted on
@@ -220,18 +225,21 @@ def _shares(load, dead, table, u, g, top, k_top):
 
 
 @njit(cache=True)
-def _step(load, dead, table, u, g, top, k_top, g_last, h, decay, c, ramp, k_inf):
+def _step(load, dead, table, u, g, top, k_top, g_last, h, decay, c, ramp, k_inf, active):
     """TransferBank.step in one compiled call: `_shares`, then `_relax`."""
     return _relax(_shares(load, dead, table, u, g, top, k_top), g_last, h, decay, c, ramp,
-                  k_inf)
+                  k_inf, active)
 
 
 @njit(cache=True)
-def _relax(g, g_last, h, decay, c, ramp, k_inf):
-    """One env step of the QLV kernels: updates the branch states ``h`` and the last shares
-    ``g_last`` in place, returns the readings (the branches summed in numpy's order)."""
-    out = np.empty(g.size)
+def _relax(g, g_last, h, decay, c, ramp, k_inf, active):
+    """One env step of the QLV kernels of the ``active`` regions: updates their branch states
+    ``h`` and last shares ``g_last`` in place, returns the readings (the branches summed in
+    numpy's order; 0 for the regions not active)."""
+    out = np.zeros(g.size)
     for i in range(g.size):
+        if not active[i]:
+            continue
         dg = g[i] - g_last[i]
         total = 0.0
         for j in range(h.shape[1]):
@@ -256,54 +264,127 @@ def _estimate(reading, dead, table, u, g_inverse):
 
 
 class SensorChain:
-    """Transfer laws followed by the electronics (module docstring) for the sensing regions."""
+    """Transfer laws followed by the electronics (module docstring) for the sensing regions of
+    one world, or of W worlds at once (`stack`, the vector env's): each world has its own laws'
+    states, noise stream and sampling clock, and every operation is per region, so that a
+    world's readings are those its own chain gives. The single env is one world (W = 1).
+
+    Args:
+        laws: per region its law, or None for an ideal surface sensor (TransferBank).
+        spec: the electronics.
+        step_s: the env step (constant).
+    """
 
     def __init__(self, laws: list[TransferLaw | None], spec: SensorSpec, step_s: float) -> None:
-        self.spec = spec.on_grid(step_s)
-        self.bank = TransferBank(laws, step_s)
-        self._period = max(1, round(self.spec.period_s / step_s))
-        self._lag = round(self.spec.latency_s / step_s)
+        self._setup(spec.on_grid(step_s), step_s, TransferBank(laws, step_s), 1, len(laws))
         self.reset(np.random.default_rng(0))
 
-    def reset(self, rng: np.random.Generator) -> None:
-        n = len(self.bank.laws)
-        self.rng = rng
-        self.bank.reset()
-        self._k = 0
-        self._play = np.zeros(n)
-        self._queue: list[tuple[int, np.ndarray]] = []  # (step available, sample)
-        self.reading = np.zeros(n)
+    @classmethod
+    def stack(cls, chains: list[SensorChain]) -> SensorChain:
+        """One chain of the one-world ``chains``' worlds (in order), at rest, each world's noise
+        drawn from its chain's generator; their electronics and env step must be the same."""
+        first = chains[0]
+        for c in chains:
+            if c.worlds != 1 or (c.spec, c.step_s, c.regions) != (first.spec, first.step_s,
+                                                                    first.regions):
+                raise ValueError("SensorChain.stack: every chain must be one world with the "
+                                 "same sensor spec, env step and regions")
+        out = cls.__new__(cls)
+        out._setup(first.spec, first.step_s, TransferBank(
+            [law for c in chains for law in c.bank.laws], first.step_s), len(chains),
+            first.regions)
+        for w, c in enumerate(chains):
+            out.reset(c.rngs[0], w)
+        return out
 
-    def step(self, load_N: np.ndarray) -> np.ndarray:
-        """The readings after one env step ending at ``load_N`` (N on each patch)."""
+    def _setup(self, spec: SensorSpec, step_s: float, bank: TransferBank, worlds: int,
+               regions: int) -> None:
+        self.spec, self.step_s, self.bank = spec, step_s, bank
+        self.worlds, self.regions = worlds, regions
+        self._period = max(1, round(spec.period_s / step_s))
+        self._lag = round(spec.latency_s / step_s)
+        # samples waiting for their latency: a sample taken every _period steps is due _lag
+        # steps later, so at most _lag // _period + 1 wait at once (a ring of that many slots)
+        slots = self._lag // self._period + 1
+        self.rngs: list[np.random.Generator] = [np.random.default_rng(0)] * worlds
+        self._k = np.zeros(worlds, np.int64)
+        self._play = np.zeros((worlds, regions))
+        self._pending = np.zeros((worlds, slots, regions))
+        self._due = np.full((worlds, slots), -1, np.int64)  # -1: an empty slot
+        self.readings = np.zeros((worlds, regions))
+
+    @property
+    def reading(self) -> np.ndarray:
+        """The current readings: (regions,) for one world, else (W, regions)."""
+        return self.readings[0].copy() if self.worlds == 1 else self.readings.copy()
+
+    def reset(self, rng: np.random.Generator, world: int = 0) -> None:
+        """World ``world`` at rest (no load, nothing sampled), its noise drawn from ``rng``."""
+        self.rngs[world] = rng
+        r = self.regions
+        self.bank.reset(slice(world * r, (world + 1) * r))
+        self._k[world] = 0
+        self._play[world] = 0.0
+        self._due[world] = -1
+        self.readings[world] = 0.0
+
+    def step(self, load_N: np.ndarray, worlds: np.ndarray | None = None) -> np.ndarray:
+        """The readings after one env step ending at ``load_N`` (N on each patch: (regions,) for
+        one world, (W, regions) for W); ``worlds``, a mask (W,): only those step, the others
+        keep their state. Returns the readings, shaped as ``load_N``."""
         s = self.spec
-        self._k += 1
-        r = self.bank.step(load_N)
+        loads = np.asarray(load_N, float).reshape(self.worlds, self.regions)
+        active = np.ones(self.worlds, bool) if worlds is None else np.asarray(worlds, bool)
+        self._k[active] += 1
+        r = self.bank.step(loads.ravel(), None if worlds is None else np.repeat(
+            active, self.regions)).reshape(self.worlds, self.regions)
         if s.hysteresis_pct > 0:
             # a play operator whose band narrows to 0 at no load (an unloaded sensor reads 0)
             half = np.minimum(0.5e-2 * s.hysteresis_pct * s.full_scale_N, np.maximum(r, 0.0))
-            self._play = np.clip(self._play, r - half, r + half)
+            self._play[active] = np.clip(self._play, r - half, r + half)[active]
             r = self._play
-        if self._k % self._period == 0:
-            noise = self.rng.normal(0.0, s.noise_N, r.shape) if s.noise_N > 0 else _NO_NOISE
-            self._queue.append((self._k + self._lag, _sample(r, noise, s.threshold_N,
-                                                              s.full_scale_N, s.resolution_N)))
-        while self._queue and self._queue[0][0] <= self._k:
-            self.reading = self._queue.pop(0)[1]
-        return self.reading
+        take = active & (self._k % self._period == 0)
+        noise = np.zeros((self.worlds, self.regions))  # a sample adds it, 0 without noise
+        if s.noise_N > 0:  # each world's own stream, one draw per sample
+            for w in np.flatnonzero(take):
+                noise[w] = self.rngs[w].normal(0.0, s.noise_N, self.regions)
+        _electronics(r, noise, take, active, self._k, self._period, self._lag, self._pending,
+                     self._due, self.readings, s.threshold_N, s.full_scale_N, s.resolution_N)
+        return self.readings[0].copy() if np.ndim(load_N) == 1 else self.readings.copy()
 
 
-_NO_NOISE = np.zeros(0)
+@njit(cache=True)
+def _electronics(r, noise, take, active, k, period, lag, pending, due, readings, threshold_N,
+                 full_scale_N, resolution_N):
+    """Sampling, latency and hold of every active world (SensorChain.step): a world that samples
+    at its step k stores `_sample` of its readings in its ring, due at k + lag; its reading is
+    then the latest sample due by k, and every sample due by k leaves the ring."""
+    slots = due.shape[1]
+    for w in range(r.shape[0]):
+        if not active[w]:
+            continue
+        if take[w]:
+            slot = (k[w] // period) % slots
+            pending[w, slot] = _sample(r[w], noise[w], threshold_N, full_scale_N, resolution_N)
+            due[w, slot] = k[w] + lag
+        latest = -1
+        for j in range(slots):
+            if 0 <= due[w, j] <= k[w] and (latest < 0 or due[w, j] > due[w, latest]):
+                latest = j
+        if latest >= 0:
+            readings[w] = pending[w, latest]
+            for j in range(slots):
+                if 0 <= due[w, j] <= k[w]:
+                    due[w, j] = -1
 
 
 @njit(cache=True)
 def _sample(reading, noise, threshold_N, full_scale_N, resolution_N):
-    """One sample of the readings: plus the noise (if drawn), 0 below the threshold (a thin film
-    reads no tension), clipped to full scale, rounded to the quantum (half to even, as
-    np.round)."""
+    """One sample of the readings: plus the noise, 0 below the threshold (a thin film reads no
+    tension), clipped to full scale, rounded to the quantum (half to even, as np.round)."""
     out = reading.copy()
     for i in range(out.size):
-        x = out[i] + noise[i] if noise.size else out[i]
+        x = out[i] + noise[i]
         x = 0.0 if x < threshold_N else (x if x != x else min(x, full_scale_N))
         if resolution_N > 0:
             x = np.rint(x / resolution_N) * resolution_N
