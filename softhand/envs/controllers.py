@@ -25,6 +25,7 @@ latency, noise, threshold and quantization, and nothing inside a pocket's dead b
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 
@@ -71,28 +72,39 @@ class _Worlds:
     def __init__(self, info: Mapping, key: str | None,
                  region_names: Sequence[str] | None = None) -> None:
         single = isinstance(info["phase"], str)
-        wrap = (lambda v: np.array([v])) if single else np.asarray
-        self.phase = wrap(info["phase"]).astype(str)
-        self.time_s = wrap(info["time_s"]).astype(float)
-        self.thumb = wrap(info["thumb_rotation_rad"]).astype(float)
-        self.grasp_thumb = wrap(info["grasp_thumb_rotation_rad"]).astype(float)
+        if single:  # one world: numbers and a dict keyed by region
+            self.phase = np.array([info["phase"]])
+            self.time_s = np.array([info["time_s"]], float)
+            self.thumb = np.array([info["thumb_rotation_rad"]], float)
+            self.grasp_thumb = np.array([info["grasp_thumb_rotation_rad"]], float)
+        else:
+            self.phase = np.asarray(info["phase"]).astype(str)
+            self.time_s = np.asarray(info["time_s"], float)
+            self.thumb = np.asarray(info["thumb_rotation_rad"], float)
+            self.grasp_thumb = np.asarray(info["grasp_thumb_rotation_rad"], float)
         self.n = self.phase.size
-        self.gripping = np.isin(self.phase, _GRIPPING)
-        self.releasing = np.isin(self.phase, _RELEASE)
+        phases = self.phase.tolist()
+        self.gripping = np.array([p in _GRIPPING for p in phases], bool)
+        self.releasing = np.array([p in _RELEASE for p in phases], bool)
         if key is not None:
             forces = info[key]
             if single:
-                self.regions = list(forces)
-                self.forces = np.array([[forces[r] for r in self.regions]], float)
+                self.regions = tuple(forces)
+                self.forces = np.array([list(forces.values())], float)
             else:
-                self.regions = list(region_names)
+                self.regions = tuple(region_names)
                 self.forces = np.asarray(forces, float)
 
     def digit(self, name: str, only: tuple[str, ...] | None = None) -> np.ndarray:
         """(W,) the largest force over a digit's regions (``only``: those regions)."""
-        cols = [i for i, r in enumerate(self.regions)
-                if (r in only if only else r.startswith(name))]
-        return self.forces[:, cols].max(axis=1)
+        return self.forces[:, _digit_columns(self.regions, name, only)].max(axis=1)
+
+
+@functools.lru_cache(maxsize=64)
+def _digit_columns(regions: tuple[str, ...], name: str,
+                   only: tuple[str, ...] | None) -> list[int]:
+    """The columns of a digit's regions (``only``: those regions) among ``regions``."""
+    return [i for i, r in enumerate(regions) if (r in only if only else r.startswith(name))]
 
 
 def _thumb_to_handshake(w: _Worlds) -> np.ndarray:

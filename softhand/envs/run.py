@@ -303,15 +303,15 @@ PALM_PIECES = {"prosthetic": ("Palm1", "Palm2", "Thenar"), "partner": ("palm", "
 
 
 def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray) -> tuple[float, float]:
-    """Normal force (N) between the two hands' palm pieces, and between the hands in all."""
+    """Normal force (N) between the two hands' palm pieces, and between the hands in all;
+    ``pro``, ``hum``: per geom, whether it is a palm piece of that hand (masks over the geoms)."""
     con = d.contact
     adr = con.efc_address
     live = adr >= 0
     if not live.any():
         return 0.0, 0.0
     g, f = con.geom[live], d.efc_force[adr[live]]
-    palm = (np.isin(g[:, 0], pro) & np.isin(g[:, 1], hum)) | (np.isin(g[:, 1], pro)
-                                                               & np.isin(g[:, 0], hum))
+    palm = (pro[g[:, 0]] & hum[g[:, 1]]) | (pro[g[:, 1]] & hum[g[:, 0]])
     return float(f[palm].sum()), float(f.sum())
 
 
@@ -553,8 +553,9 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
     m, d = base.model, base.data
     zones = [m.site(f"pro_touch_{r}").id for r in base.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in base.region_geoms], pair_laws(base), zones)
-    palms = [np.array([m.geom(f"{prefix}{p}").id for p in pieces]) for prefix, pieces in
-             (("pro_skin_", PALM_PIECES["prosthetic"]), ("hum_tissue_", PALM_PIECES["partner"]))]
+    palms = [np.isin(np.arange(m.ngeom), [m.geom(f"{prefix}{p}").id for p in pieces])
+             for prefix, pieces in (("pro_skin_", PALM_PIECES["prosthetic"]),
+                                    ("hum_tissue_", PALM_PIECES["partner"]))]
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
                                                 "acc", "sf", "pf", "s", "g", "pp")}
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
