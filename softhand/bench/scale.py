@@ -48,11 +48,13 @@ VECTOR_WORLDS = (2, 8, 32, 128)
 STAGES = (
     ("physics", "mj_step, the frame's 5 physics steps"),
     ("physics loop", "the mount path and the divergence checks around mj_step"),
-    ("region forces", "the regions' contact sensors summed, skin and bone"),
+    ("region forces", "the regions' contact sensors summed, skin and bone; the same call "
+     "counts the saturated sensors and reads the partner's feel"),
     ("embedded sensors", "the transfer laws and the electronics of the 18 patch sensors"),
-    ("saturated sensors", "contact sensors that matched more contacts than their slots"),
+    ("saturated sensors", "contact sensors that matched more contacts than their slots (read "
+     "with the region forces)"),
     ("range check", "the contacts beyond their law's calibrated range"),
-    ("partner script", "the partner's feel and its grip regulator"),
+    ("partner script", "the partner's grip regulator, from its feel"),
     ("phase and reward", "the handshake's phase and the reward's terms"),
     ("info", "the info dict"),
     ("observation", "the observation vector"),

@@ -51,6 +51,7 @@ __all__ = [
     "check_reset_options",
     "partner_postures",
     "partner_size_range",
+    "phase_at",
     "phase_index",
 ]
 
@@ -117,8 +118,9 @@ def _min_jerk(s):
 
 
 @njit(cache=True, inline="always")
-def _phase(ends: np.ndarray, t: float) -> int:
-    """Index in PHASES at time ``t`` of one world whose phases but ``done`` end at ``ends``."""
+def phase_at(ends: np.ndarray, t: float) -> int:
+    """Index in PHASES at time ``t`` (s) of one world whose phases but ``done`` end at ``ends``
+    (its Timeline.ends; compiled, for the per-step kernels and the single env)."""
     k = 0
     for e in ends:
         k += e <= t
@@ -135,7 +137,7 @@ def phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
 def _phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
     out = np.empty(t.size, np.int64)
     for w in range(t.size):
-        out[w] = _phase(ends[w], t[w])
+        out[w] = phase_at(ends[w], t[w])
     return out
 
 
@@ -287,7 +289,7 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
     """
     out = open_q.copy()  # the reach
     for w in range(t.size):
-        phase = _phase(ends[w], t[w])
+        phase = phase_at(ends[w], t[w])
         if phase == 1 or phase == 2:
             s = _min_jerk((t[w] - ends[w, 0]) / CLOSE_S)
             target = grip_N[w]

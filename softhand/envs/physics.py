@@ -130,6 +130,8 @@ class MujocoPhysics:
         self._warnings = self.data.warning.number  # MuJoCo's warning counters (a view)
         #: why the last `advance` diverged (None: it did not, or no step since reset)
         self.divergence: Divergence | None = None
+        self._reads: tuple | None = None  # the sensors' reads of the state (`_read`)
+        self._opt = model.opt  # a view of the model's options, made once (each access makes one)
 
     @property
     def time(self) -> float:
@@ -142,7 +144,7 @@ class MujocoPhysics:
         before the episode)."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)  # also zeroes MuJoCo's warning counters
-        self.divergence = None
+        self.divergence, self._reads = None, None
         d.mocap_pos[self._mocap] = mount_pos
         d.mocap_quat[self._mocap] = mount_quat
         for qadr, aadr, value in preset:
@@ -162,9 +164,9 @@ class MujocoPhysics:
         buffer, bad control, bad inertia), or the state is not finite. The state is then not a
         continuation of the episode. The checks read a time per step and a few counters and
         sums per action."""
-        m, d, row, opt = self.model, self.data, self._row, self.model.opt
+        m, d, row, opt = self.model, self.data, self._row, self._opt
         h = opt.timestep
-        self.divergence = None
+        self.divergence, self._reads = None, None
         flags = opt.disableflags
         opt.disableflags = flags | _NO_SENSORS
         try:
@@ -192,15 +194,22 @@ class MujocoPhysics:
     def _divergence(self, t: float) -> Divergence:
         return diagnose(self.model, self.data, t)
 
+    def _read(self) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+        """The sensors' reads of this state (`SensorLayout.read`), made once per state."""
+        if self._reads is None:
+            self._reads = self.sensors.read(self._sensordata)
+        return self._reads
+
     def region_forces(self) -> tuple[np.ndarray, np.ndarray]:
         """Per region: the force on its sensed skin and bone together (N), and the bone's part."""
-        return self.sensors.region_forces(self._sensordata)
+        total, bone, _, _ = self._read()
+        return total, bone
 
     def saturated_sensors(self) -> int:
-        return int(self.sensors.saturated(self._sensordata))
+        return self._read()[2]
 
     def partner_feel(self) -> np.ndarray:
-        return self.sensors.feel(self._sensordata)
+        return self._read()[3]
 
     def contacts_above(self, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(geom pairs (k, 2), normal forces (k,), limits (k,)) of the contacts whose normal force
@@ -268,6 +277,14 @@ class SensorLayout:
                                      self._bone_starts, self._n_regions)
         return (total, bone) if sensordata.ndim > 1 else (total[0], bone[0])
 
+    def read(self, sensordata: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+        """One world's (1-D sensordata) `region_forces`, `saturated` and `feel` in one compiled
+        call: (force per region, its bone's part, saturated sensors, feel per phalanx)."""
+        total, bone, saturated, feel = _read(sensordata[None], self._found_idx, self._bone_adr,
+                                             self._bone_region, self._bone_starts,
+                                             self._n_regions, self._feel_adr)
+        return total[0], bone[0], int(saturated[0]), feel[0]
+
     def saturated(self, sensordata: np.ndarray) -> np.ndarray:
         """How many region sensors matched more contacts than they have slots."""
         out = _saturated(np.atleast_2d(sensordata), self._found_idx)
@@ -306,6 +323,12 @@ def _region_forces(rows, region_adr, bone_adr, bone_region, bone_starts, n_regio
         for i in range(n_regions):
             total[w, i] = _slots_force(row, region_adr[i]) + bone[w, i]
     return total, bone
+
+
+@njit(cache=True)
+def _read(rows, region_adr, bone_adr, bone_region, bone_starts, n_regions, feel_adr):
+    total, bone = _region_forces(rows, region_adr, bone_adr, bone_region, bone_starts, n_regions)
+    return total, bone, _saturated(rows, region_adr), _feel(rows, feel_adr)
 
 
 @njit(cache=True)

@@ -204,6 +204,7 @@ class TwoHandTouchEnv(gym.Env):
         # every scene built here): numpy takes a slice without an index array or a copy
         self._q_at, self._v_at = _span(self._pro_qpos), _span(self._pro_dof)
         self._act_at, self._servo_at = _span(self._pro_act), _span(self.partner_servos)
+        self._action_period_s = float(m.opt.timestep) * self.frame_skip
         # calibrated force range of every contact pair, as a geom x geom table (inf: no pair)
         #: the law of every skin pair, and why (softhand.envs.skins.pair_choices)
         self.pair_laws = pair_choices(m, self.skins, self.representations, directory=directory,
@@ -254,6 +255,7 @@ class TwoHandTouchEnv(gym.Env):
         dt = self.model.opt.timestep
         # the mount's path at every physics step (a scripted arm: no feedback from the contacts)
         self._mount = mount_path(self.scenario, dt, self.frame_skip)
+        self._duration_s = self.scenario.duration_s  # the episode's length, fixed at its reset
         self._step_index = 0
         self.physics.reset(start, quat, self._preset)
         self._forces = np.zeros(len(self.region_names))
@@ -294,7 +296,7 @@ class TwoHandTouchEnv(gym.Env):
             raise RuntimeError(f"the episode is over ({self._ended} at t = {self._ended_s:.3f} "
                                "s): call reset() before step()")
         physics, scenario = self.physics, self.scenario
-        ctrl, opt = self._ctrl, self.model.opt
+        ctrl = self._ctrl
         t = physics.time
         if self.hand == "human":  # the relaxed hand follows the scenario; the action is unused
             ctrl[self._act_at] = scenario.sensored_targets(t)
@@ -302,7 +304,7 @@ class TwoHandTouchEnv(gym.Env):
             ctrl[self._act_at] = a * self._max_speed
         # the partner's digits act once per action step (100 Hz by default), the arm every step
         ctrl[self._servo_at] = scenario.partner_targets(t, physics.partner_feel(),
-                                                        opt.timestep * self.frame_skip)
+                                                        self._action_period_s)
         k, mount = self._step_index, self._mount
         end = k + self.frame_skip
         # None, or why the physics diverged (MuJoCo reset itself, warned, or went non-finite)
@@ -321,7 +323,7 @@ class TwoHandTouchEnv(gym.Env):
         phase = scenario.phase(now)
         terms = scenario.reward_terms(self._forces, a, phase)
         reward = sum(terms.values()) if not unstable else -100.0
-        truncated = d.time >= scenario.duration_s - 1e-9
+        truncated = d.time >= self._duration_s - 1e-9
         info = self._info(terms, phase)
         info["unstable"] = str(diverged) if unstable else False
         if unstable:  # the time of the last good state, not of MuJoCo's reset state
@@ -473,7 +475,7 @@ class TwoHandTouchEnv(gym.Env):
         obs[2 * n:-1] = region_values(self.observe, {
             "sensor_patch": self._readings, "region_load": self._forces,
             "load_estimate": self._estimate})
-        obs[-1] = self.data.time / self.scenario.duration_s
+        obs[-1] = self.data.time / self._duration_s
         return obs
 
     def _info(self, terms: dict[str, float], phase: str) -> dict[str, Any]:

@@ -147,119 +147,112 @@ class TransferBank:
         self.laws = list(laws)
         n = len(laws)
         terms = max([len(law.kernel.c) for law in laws if law is not None] or [0])
-        self.dead = np.array([0.0 if law is None else law.dead_band_N for law in laws])
-        self.k_inf = np.ones(n)
-        self.c = np.zeros((n, terms))
-        self.decay = np.ones((n, terms))
-        self.ramp = np.zeros((n, terms))
-        # each law's share table (made once per law), laid end to end for the compiled kernels;
-        # per region where its table starts and ends (an empty range: an ideal sensor)
+        # the compiled kernels take few arrays (each argument costs a call): per region its
+        # numbers (dead band, the share table's end and end stiffness, k_inf), its QLV
+        # factors (decay, c x ramp), its state (last share, branches); the attributes are views
+        self._f = np.zeros((n, 4))
+        self._f[:, 3] = 1.0
+        self.dead, self.k_inf = self._f[:, 0], self._f[:, 3]
+        self._qlv = np.zeros((2, n, terms))
+        self._qlv[0] = 1.0
+        self.decay = self._qlv[0]
+        self._state = np.zeros((n, 1 + terms))
+        self.g, self.h = self._state[:, 0], self._state[:, 1:]
+        # each law's share table (made once per law), laid end to end; per region where its
+        # table starts and ends (an empty range: an ideal sensor)
         shares: dict[int, tuple[int, _Share]] = {}
         self._table = np.zeros((n, 2), np.int64)
         for i, law in enumerate(laws):
             if law is None:
                 continue
             k = len(law.kernel.c)
-            self.k_inf[i] = law.kernel.k_inf
-            self.c[i, :k] = law.kernel.c
             d, r = law.kernel.step_factors(step_s)
-            self.decay[i, :k], self.ramp[i, :k] = d, r
+            self._f[i] = (law.dead_band_N, law.share.max_mm, law.share.end_stiffness,
+                          law.kernel.k_inf)
+            self._qlv[0, i, :k] = d
+            self._qlv[1, i, :k] = np.asarray(law.kernel.c, float) * r  # c x ramp, as the step
             start = sum(len(sh.u) for _, sh in shares.values())
             start, share = shares.setdefault(id(law), (start, _Share(law)))
             self._table[i] = start, start + len(share.u)
         tables = [sh for _, sh in shares.values()]
-        self._u = np.concatenate([sh.u for sh in tables] or [np.zeros(0)])
-        self._g = np.concatenate([sh.g for sh in tables] or [np.zeros(0)])
-        self._g_inverse = np.concatenate([sh.inverse.f for sh in tables] or [np.zeros(0)])
-        self._top = np.array([0.0 if law is None else law.share.max_mm for law in laws])
-        self._k_top = np.array([0.0 if law is None else law.share.end_stiffness for law in laws])
+        # the tables' u, g(u) and the monotone inverse's g, end to end
+        self._tables = np.array([np.concatenate(parts or [np.zeros(0)]) for parts in (
+            [sh.u for sh in tables], [sh.g for sh in tables], [sh.inverse.f for sh in tables])])
         self._every = np.ones(n, bool)
-        self.h = np.zeros_like(self.c)
-        self.g = np.zeros(n)
 
     def reset(self, regions: slice | np.ndarray | None = None) -> None:
         """The QLV states of ``regions`` (default all) to rest."""
-        r = slice(None) if regions is None else regions
-        self.h[r] = 0.0
-        self.g[r] = 0.0
+        self._state[slice(None) if regions is None else regions] = 0.0
 
     def share(self, load_N: np.ndarray) -> np.ndarray:
         """Each region's static share of its load (N on the patch): its law's static curve past
         the dead band on the law's table, 0 below it, linear past the fitted range (as
         `ElasticLaw.force`); an ideal sensor's share is the load."""
-        return _shares(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
-                       self._top, self._k_top)
+        return _shares(np.asarray(load_N, float), self._table, self._tables, self._f)
 
     def step(self, load_N: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """Readings (N on each patch) after one env step that ends at loads ``load_N``; with
         ``active`` (a mask of the regions), the others keep their states (and read 0 here)."""
-        return _step(np.asarray(load_N, float), self.dead, self._table, self._u, self._g,
-                     self._top, self._k_top, self.g, self.h, self.decay, self.c, self.ramp,
-                     self.k_inf, self._every if active is None else active)
+        return _relax(self.share(load_N), self._state, self._qlv, self._f,
+                      self._every if active is None else active)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
         """The load a calibrated read-out infers from each reading: the static share inverted on
         its table (a reading of 0 gives 0: a dead band cannot be seen into; past the fitted range,
         the table's end)."""
-        return _estimate(np.asarray(reading_N, float), self.dead, self._table, self._u,
-                         self._g_inverse)
+        return _estimate(np.asarray(reading_N, float), self._table, self._tables, self._f)
 
 
 @njit(cache=True)
-def _shares(load, dead, table, u, g, top, k_top):
+def _shares(load, table, tables, f):
     """Each region's static share of its load: `_Share` of (load - dead band) on its law's
     table (np.interp, 0 below the table, linear past it); an ideal sensor's is the load."""
+    u, g = tables[0], tables[1]
     out = load.copy()
     for i in range(load.size):
         a, b = table[i]
         if a == b:
             continue
-        x = load[i] - dead[i]
+        x = load[i] - f[i, 0]
         if x < u[a]:
             out[i] = 0.0
-        elif x > top[i]:
-            out[i] = g[b - 1] + (x - top[i]) * k_top[i]
+        elif x > f[i, 1]:
+            out[i] = g[b - 1] + (x - f[i, 1]) * f[i, 2]
         else:
             out[i] = np.interp(x, u[a:b], g[a:b])
     return out
 
 
 @njit(cache=True)
-def _step(load, dead, table, u, g, top, k_top, g_last, h, decay, c, ramp, k_inf, active):
-    """TransferBank.step in one compiled call: `_shares`, then `_relax`."""
-    return _relax(_shares(load, dead, table, u, g, top, k_top), g_last, h, decay, c, ramp,
-                  k_inf, active)
-
-
-@njit(cache=True)
-def _relax(g, g_last, h, decay, c, ramp, k_inf, active):
-    """One env step of the QLV kernels of the ``active`` regions: updates their branch states
-    ``h`` and last shares ``g_last`` in place, returns the readings (the branches summed in
-    numpy's order; 0 for the regions not active)."""
+def _relax(g, state, qlv, f, active):
+    """One env step of the QLV kernels of the ``active`` regions: updates their last shares
+    (``state[:, 0]``) and branch states (``state[:, 1:]``) in place, returns the readings (the
+    branches summed in numpy's order; 0 for the regions not active)."""
     out = np.zeros(g.size)
     for i in range(g.size):
         if not active[i]:
             continue
-        dg = g[i] - g_last[i]
+        dg = g[i] - state[i, 0]
         total = 0.0
-        for j in range(h.shape[1]):
-            h[i, j] = decay[i, j] * h[i, j] + c[i, j] * ramp[i, j] * dg
-            total += h[i, j]
-        g_last[i] = g[i]
-        out[i] = k_inf[i] * g[i] + total
+        for j in range(qlv.shape[2]):
+            state[i, 1 + j] = qlv[0, i, j] * state[i, 1 + j] + qlv[1, i, j] * dg
+            total += state[i, 1 + j]
+        state[i, 0] = g[i]
+        out[i] = f[i, 3] * g[i] + total
     return out
 
 
 @njit(cache=True)
-def _estimate(reading, dead, table, u, g_inverse):
+def _estimate(reading, table, tables, f):
     """TransferBank.load_estimate, compiled: np.interp on each law's monotone inverse."""
+    u, g_inverse = tables[0], tables[2]
     out = reading.copy()
     for i in range(reading.size):
         a, b = table[i]
         if a == b:
             continue
         r = reading[i]
-        out[i] = np.interp(r, g_inverse[a:b], u[a:b]) + dead[i] if r > 0 else 0.0
+        out[i] = np.interp(r, g_inverse[a:b], u[a:b]) + f[i, 0] if r > 0 else 0.0
     return out
 
 
@@ -274,6 +267,9 @@ class SensorChain:
         spec: the electronics.
         step_s: the env step (constant).
     """
+
+    #: samples of noise drawn at a time per world
+    NOISE_BLOCK = 64
 
     def __init__(self, laws: list[TransferLaw | None], spec: SensorSpec, step_s: float) -> None:
         self._setup(spec.on_grid(step_s), step_s, TransferBank(laws, step_s), 1, len(laws))
@@ -308,10 +304,18 @@ class SensorChain:
         slots = self._lag // self._period + 1
         self.rngs: list[np.random.Generator] = [np.random.default_rng(0)] * worlds
         self._k = np.zeros(worlds, np.int64)
-        self._play = np.zeros((worlds, regions))
+        # per world and region: the hysteresis' play and the reading; half the band at full load
+        self._wr = np.zeros((2, worlds, regions))
+        self._play, self.readings = self._wr[0], self._wr[1]
+        # each world's noise, drawn from its stream NOISE_BLOCK samples at a time (the same
+        # numbers as one draw per sample: a generator's draws run on, whatever their sizes);
+        # without noise one row of zeros that every sample adds
+        self._noise = np.zeros((worlds, self.NOISE_BLOCK if spec.noise_N > 0 else 1, regions))
+        self._noise_at = np.full(worlds, self._noise.shape[1] if spec.noise_N > 0 else 0)
+        self._band = 0.5e-2 * spec.hysteresis_pct * spec.full_scale_N
+        self._flags = np.ones((2, worlds), bool)  # the worlds stepping, those sampling
         self._pending = np.zeros((worlds, slots, regions))
         self._due = np.full((worlds, slots), -1, np.int64)  # -1: an empty slot
-        self.readings = np.zeros((worlds, regions))
 
     @property
     def reading(self) -> np.ndarray:
@@ -325,6 +329,8 @@ class SensorChain:
         self.bank.reset(slice(world * r, (world + 1) * r))
         self._k[world] = 0
         self._play[world] = 0.0
+        if self.spec.noise_N > 0:
+            self._noise_at[world] = self.NOISE_BLOCK  # a new stream: drawn at its first sample
         self._due[world] = -1
         self.readings[world] = 0.0
 
@@ -332,40 +338,71 @@ class SensorChain:
         """The readings after one env step ending at ``load_N`` (N on each patch: (regions,) for
         one world, (W, regions) for W); ``worlds``, a mask (W,): only those step, the others
         keep their state. Returns the readings, shaped as ``load_N``."""
-        s = self.spec
-        loads = np.asarray(load_N, float).reshape(self.worlds, self.regions)
-        active = np.ones(self.worlds, bool) if worlds is None else np.asarray(worlds, bool)
-        self._k[active] += 1
-        r = self.bank.step(loads.ravel(), None if worlds is None else np.repeat(
-            active, self.regions)).reshape(self.worlds, self.regions)
-        if s.hysteresis_pct > 0:
-            # a play operator whose band narrows to 0 at no load (an unloaded sensor reads 0)
-            half = np.minimum(0.5e-2 * s.hysteresis_pct * s.full_scale_N, np.maximum(r, 0.0))
-            self._play[active] = np.clip(self._play, r - half, r + half)[active]
-            r = self._play
-        take = active & (self._k % self._period == 0)
-        noise = np.zeros((self.worlds, self.regions))  # a sample adds it, 0 without noise
-        if s.noise_N > 0:  # each world's own stream, one draw per sample
-            for w in np.flatnonzero(take):
-                noise[w] = self.rngs[w].normal(0.0, s.noise_N, self.regions)
-        _electronics(r, noise, take, active, self._k, self._period, self._lag, self._pending,
-                     self._due, self.readings, s.threshold_N, s.full_scale_N, s.resolution_N)
+        s, bank, flags = self.spec, self.bank, self._flags
+        if worlds is None and self.worlds == 1:  # the single env: no array arithmetic here
+            flags[0, 0], flags[1, 0] = True, (int(self._k[0]) + 1) % self._period == 0
+        else:
+            flags[0] = True if worlds is None else np.asarray(worlds, bool)
+            flags[1] = flags[0] & ((self._k + 1) % self._period == 0)  # who samples now
+        if s.noise_N > 0:  # a world that samples with its block used up draws the next block
+            used_up = self._noise_at >= self.NOISE_BLOCK
+            for w in ((0,) if flags[1, 0] and used_up[0] else ()) if self.worlds == 1 else \
+                    np.flatnonzero(flags[1] & used_up):
+                self._noise[w] = self.rngs[w].normal(0.0, s.noise_N, self._noise.shape[1:])
+                self._noise_at[w] = 0
+        _chain_step(np.asarray(load_N, float).reshape(self.worlds, self.regions), flags,
+                    bank._table, bank._tables, bank._f, bank._qlv, bank._state, self._wr,
+                    self._noise, self._noise_at, self._k, self._pending, self._due, self._band,
+                    self._period, self._lag, s.threshold_N, s.full_scale_N, s.resolution_N)
         return self.readings[0].copy() if np.ndim(load_N) == 1 else self.readings.copy()
 
 
 @njit(cache=True)
-def _electronics(r, noise, take, active, k, period, lag, pending, due, readings, threshold_N,
-                 full_scale_N, resolution_N):
+def _chain_step(loads, flags, table, tables, f, qlv, state, wr, noise, noise_at, k, pending,
+                due, band, period, lag, threshold_N, full_scale_N, resolution_N):
+    """SensorChain.step of the worlds ``flags[0]`` (those sampling: ``flags[1]``) in one
+    compiled call: their regions' transfer laws (TransferBank's `_shares`, `_relax`), the
+    hysteresis' play operator (``band`` > 0: half its width at full load, narrowing to 0 at no
+    load, as np.clip(play, r - half, r + half)), then `_electronics`. ``wr``: play and
+    readings (2, W, regions); ``noise`` (W, block, regions) from row ``noise_at`` on."""
+    worlds, regions = loads.shape
+    r = np.zeros((worlds, regions))
+    every = np.ones(regions, np.bool_)
+    play = wr[0]
+    for w in range(worlds):
+        if not flags[0, w]:
+            continue
+        k[w] += 1
+        at = slice(w * regions, (w + 1) * regions)
+        r[w] = _relax(_shares(loads[w], table[at], tables, f[at]), state[at], qlv[:, at],
+                      f[at], every)
+        if band > 0:
+            for i in range(regions):
+                half = min(band, max(r[w, i], 0.0))
+                play[w, i] = min(max(play[w, i], r[w, i] - half), r[w, i] + half)
+                r[w, i] = play[w, i]
+    _electronics(r, noise, noise_at, flags[1], flags[0], k, period, lag, pending, due, wr[1],
+                 threshold_N, full_scale_N, resolution_N)
+
+
+@njit(cache=True)
+def _electronics(r, noise, noise_at, take, active, k, period, lag, pending, due, readings,
+                 threshold_N, full_scale_N, resolution_N):
     """Sampling, latency and hold of every active world (SensorChain.step): a world that samples
-    at its step k stores `_sample` of its readings in its ring, due at k + lag; its reading is
-    then the latest sample due by k, and every sample due by k leaves the ring."""
+    at its step k stores `_sample` of its readings plus its next row of ``noise`` (a block of
+    one row of zeros without noise: ``noise_at`` stays 0) in its ring, due at k + lag; its
+    reading is then the latest sample due by k, and every sample due by k leaves the ring."""
     slots = due.shape[1]
+    noisy = noise.shape[1] > 1
     for w in range(r.shape[0]):
         if not active[w]:
             continue
         if take[w]:
             slot = (k[w] // period) % slots
-            pending[w, slot] = _sample(r[w], noise[w], threshold_N, full_scale_N, resolution_N)
+            pending[w, slot] = _sample(r[w], noise[w, noise_at[w]], threshold_N, full_scale_N,
+                                       resolution_N)
+            if noisy:
+                noise_at[w] += 1
             due[w, slot] = k[w] + lag
         latest = -1
         for j in range(slots):

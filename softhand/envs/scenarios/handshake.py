@@ -30,6 +30,7 @@ from softhand.envs.partner import (
     RelaxedHand,
     Timeline,
     partner_postures,
+    phase_at,
     phase_index,
 )
 from softhand.envs.scenario import Scenario
@@ -150,7 +151,7 @@ class HandshakeScenario(Scenario):
     def phase(self, t: float) -> str:
         if self.script is None:
             return self.timeline.phase(t)
-        return self.phases[int(self.world.phase_index(np.array([t], float))[0])]
+        return self.phases[phase_at(self.script.ends[0], float(t))]  # the one world's
 
     def reward_terms(self, forces_N: np.ndarray, action: np.ndarray,
                      phase: str) -> dict[str, float]:
