@@ -63,3 +63,26 @@ def test_the_reward_kernel_is_the_documented_formula():
                      -weights[:, 3] * (action * action).sum(axis=1)], axis=1)
     assert engaged.any() and not engaged.all() and (over > 0).any()
     np.testing.assert_array_equal(got, want)
+
+
+def test_interp_is_numpys_interp_bit_for_bit():
+    """The compiled np.interp of one number, on increasing tables, tables with repeated knots
+    (a running maximum, as the sensors' inverse tables), uniform ones, at the knots, between
+    them, outside and at NaN."""
+    from softhand.compiled import interp
+
+    rng = np.random.default_rng(0)
+    checked = 0
+    for trial in range(120):
+        m = int(rng.integers(2, 200))
+        xp = np.sort(rng.uniform(0, 5, m))
+        if trial % 3 == 0:
+            xp = np.maximum.accumulate(np.round(xp, 1))  # repeated knots
+        if trial % 5 == 0:
+            xp = np.linspace(0.0, rng.uniform(1, 3), m)
+        fp = np.cumsum(rng.uniform(0, 1, m)) ** rng.uniform(0.5, 2)
+        for x in np.concatenate([rng.uniform(-0.5, 5.5, 100), xp, xp + 1e-15, [np.nan]]):
+            want, got = np.interp(x, xp, fp), interp(float(x), xp, fp)
+            assert got == want or (np.isnan(got) and np.isnan(want)), (x, got, want)
+            checked += 1
+    assert checked > 20_000

@@ -297,11 +297,13 @@ class SensorLayout:
         return out if sensordata.ndim > 1 else out[0]
 
 
-@njit(cache=True)
-def _slots_force(row: np.ndarray, adr: int) -> float:
+@njit(cache=True, inline="always")
+def _slots_force(row: np.ndarray, adr: int, scratch: np.ndarray) -> float:
     """A contact sensor's summed normal force: its SENSOR_SLOTS slots' second entries, summed in
-    numpy's order (contact_sensor_force bit for bit)."""
-    return pairwise_sum(row[adr + 1:adr + 4 * SENSOR_SLOTS:4])
+    numpy's order (contact_sensor_force bit for bit), gathered into ``scratch`` (SENSOR_SLOTS)."""
+    for s in range(SENSOR_SLOTS):
+        scratch[s] = row[adr + 1 + 4 * s]
+    return pairwise_sum(scratch)
 
 
 @njit(cache=True)
@@ -312,16 +314,17 @@ def _region_forces(rows, region_adr, bone_adr, bone_region, bone_starts, n_regio
     total = np.empty((worlds, n_regions))
     bone = np.zeros((worlds, n_regions))
     per_bone = np.empty(bone_adr.size)
+    scratch = np.empty(SENSOR_SLOTS)
     for w in range(worlds):
         row = rows[w]
         for k in range(bone_adr.size):
-            per_bone[k] = _slots_force(row, bone_adr[k])
+            per_bone[k] = _slots_force(row, bone_adr[k], scratch)
         for j in range(bone_starts.size):
             start = bone_starts[j]
             end = bone_starts[j + 1] if j + 1 < bone_starts.size else bone_adr.size
             bone[w, bone_region[start]] = per_bone[start] + pairwise_sum(per_bone[start + 1:end])
         for i in range(n_regions):
-            total[w, i] = _slots_force(row, region_adr[i]) + bone[w, i]
+            total[w, i] = _slots_force(row, region_adr[i], scratch) + bone[w, i]
     return total, bone
 
 

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from softhand.compiled import interp
 from softhand.laws.elastic import MonotoneInverse
 from softhand.sensors.transfer import TransferLaw
 from softhand.validate import check_number
@@ -193,8 +194,8 @@ class TransferBank:
     def step(self, load_N: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """Readings (N on each patch) after one env step that ends at loads ``load_N``; with
         ``active`` (a mask of the regions), the others keep their states (and read 0 here)."""
-        return _relax(self.share(load_N), self._state, self._qlv, self._f,
-                      self._every if active is None else active)
+        return _bank_step(np.asarray(load_N, float), self._table, self._tables, self._f,
+                          self._qlv, self._state, self._every if active is None else active)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
         """The load a calibrated read-out infers from each reading: the static share inverted on
@@ -203,42 +204,53 @@ class TransferBank:
         return _estimate(np.asarray(reading_N, float), self._table, self._tables, self._f)
 
 
+@njit(cache=True, inline="always")
+def _share(i, load, table, tables, f):
+    """Region ``i``'s static share of its load: `_Share` of (load - dead band) on its law's
+    table (np.interp, 0 below the table, linear past it); an ideal sensor's is the load."""
+    a, b = table[i, 0], table[i, 1]
+    if a == b:
+        return load
+    u, g = tables[0], tables[1]
+    x = load - f[i, 0]
+    if x < u[a]:
+        return 0.0
+    if x > f[i, 1]:
+        return g[b - 1] + (x - f[i, 1]) * f[i, 2]
+    return interp(x, u[a:b], g[a:b])
+
+
+@njit(cache=True, inline="always")
+def _relax(i, g, state, qlv, f):
+    """One env step of region ``i``'s QLV kernel at share ``g``: updates its last share
+    (``state[i, 0]``) and branch states (``state[i, 1:]``) in place, returns its reading (the
+    branches summed in numpy's order)."""
+    dg = g - state[i, 0]
+    total = 0.0
+    for j in range(qlv.shape[2]):
+        state[i, 1 + j] = qlv[0, i, j] * state[i, 1 + j] + qlv[1, i, j] * dg
+        total += state[i, 1 + j]
+    state[i, 0] = g
+    return f[i, 3] * g + total
+
+
 @njit(cache=True)
 def _shares(load, table, tables, f):
-    """Each region's static share of its load: `_Share` of (load - dead band) on its law's
-    table (np.interp, 0 below the table, linear past it); an ideal sensor's is the load."""
-    u, g = tables[0], tables[1]
-    out = load.copy()
+    """TransferBank.share: `_share` of every region."""
+    out = np.empty(load.size)
     for i in range(load.size):
-        a, b = table[i]
-        if a == b:
-            continue
-        x = load[i] - f[i, 0]
-        if x < u[a]:
-            out[i] = 0.0
-        elif x > f[i, 1]:
-            out[i] = g[b - 1] + (x - f[i, 1]) * f[i, 2]
-        else:
-            out[i] = np.interp(x, u[a:b], g[a:b])
+        out[i] = _share(i, load[i], table, tables, f)
     return out
 
 
 @njit(cache=True)
-def _relax(g, state, qlv, f, active):
-    """One env step of the QLV kernels of the ``active`` regions: updates their last shares
-    (``state[:, 0]``) and branch states (``state[:, 1:]``) in place, returns the readings (the
-    branches summed in numpy's order; 0 for the regions not active)."""
-    out = np.zeros(g.size)
-    for i in range(g.size):
-        if not active[i]:
-            continue
-        dg = g[i] - state[i, 0]
-        total = 0.0
-        for j in range(qlv.shape[2]):
-            state[i, 1 + j] = qlv[0, i, j] * state[i, 1 + j] + qlv[1, i, j] * dg
-            total += state[i, 1 + j]
-        state[i, 0] = g[i]
-        out[i] = f[i, 3] * g[i] + total
+def _bank_step(load, table, tables, f, qlv, state, active):
+    """TransferBank.step: `_share`, then `_relax`, of the ``active`` regions (0 for the
+    others, whose states stay)."""
+    out = np.zeros(load.size)
+    for i in range(load.size):
+        if active[i]:
+            out[i] = _relax(i, _share(i, load[i], table, tables, f), state, qlv, f)
     return out
 
 
@@ -252,7 +264,7 @@ def _estimate(reading, table, tables, f):
         if a == b:
             continue
         r = reading[i]
-        out[i] = np.interp(r, g_inverse[a:b], u[a:b]) + f[i, 0] if r > 0 else 0.0
+        out[i] = interp(r, g_inverse[a:b], u[a:b]) + f[i, 0] if r > 0 else 0.0
     return out
 
 
@@ -361,46 +373,46 @@ class SensorChain:
 def _chain_step(loads, flags, table, tables, f, qlv, state, wr, noise, noise_at, k, pending,
                 due, band, period, lag, threshold_N, full_scale_N, resolution_N):
     """SensorChain.step of the worlds ``flags[0]`` (those sampling: ``flags[1]``) in one
-    compiled call: their regions' transfer laws (TransferBank's `_shares`, `_relax`), the
+    compiled call: their regions' transfer laws (TransferBank's `_share`, `_relax`), the
     hysteresis' play operator (``band`` > 0: half its width at full load, narrowing to 0 at no
     load, as np.clip(play, r - half, r + half)), then `_electronics`. ``wr``: play and
     readings (2, W, regions); ``noise`` (W, block, regions) from row ``noise_at`` on."""
     worlds, regions = loads.shape
     r = np.zeros((worlds, regions))
-    every = np.ones(regions, np.bool_)
-    play = wr[0]
     for w in range(worlds):
         if not flags[0, w]:
             continue
         k[w] += 1
-        at = slice(w * regions, (w + 1) * regions)
-        r[w] = _relax(_shares(loads[w], table[at], tables, f[at]), state[at], qlv[:, at],
-                      f[at], every)
-        if band > 0:
-            for i in range(regions):
+        for i in range(regions):
+            at = w * regions + i  # the region's row in the bank
+            r[w, i] = _relax(at, _share(at, loads[w, i], table, tables, f), state, qlv, f)
+            if band > 0:
                 half = min(band, max(r[w, i], 0.0))
-                play[w, i] = min(max(play[w, i], r[w, i] - half), r[w, i] + half)
-                r[w, i] = play[w, i]
-    _electronics(r, noise, noise_at, flags[1], flags[0], k, period, lag, pending, due, wr[1],
-                 threshold_N, full_scale_N, resolution_N)
+                wr[0, w, i] = min(max(wr[0, w, i], r[w, i] - half), r[w, i] + half)
+                r[w, i] = wr[0, w, i]
+    _electronics(r, noise, noise_at, flags, k, period, lag, pending, due, wr, threshold_N,
+                 full_scale_N, resolution_N)
 
 
 @njit(cache=True)
-def _electronics(r, noise, noise_at, take, active, k, period, lag, pending, due, readings,
-                 threshold_N, full_scale_N, resolution_N):
+def _electronics(r, noise, noise_at, flags, k, period, lag, pending, due, wr, threshold_N,
+                 full_scale_N, resolution_N):
     """Sampling, latency and hold of every active world (SensorChain.step): a world that samples
     at its step k stores `_sample` of its readings plus its next row of ``noise`` (a block of
     one row of zeros without noise: ``noise_at`` stays 0) in its ring, due at k + lag; its
-    reading is then the latest sample due by k, and every sample due by k leaves the ring."""
+    reading (``wr[1]``) is then the latest sample due by k, and every sample due by k leaves
+    the ring. ``flags``: the worlds stepping, those sampling."""
     slots = due.shape[1]
     noisy = noise.shape[1] > 1
     for w in range(r.shape[0]):
-        if not active[w]:
+        if not flags[0, w]:
             continue
-        if take[w]:
+        if flags[1, w]:
             slot = (k[w] // period) % slots
-            pending[w, slot] = _sample(r[w], noise[w, noise_at[w]], threshold_N, full_scale_N,
-                                       resolution_N)
+            row = noise_at[w]
+            for i in range(r.shape[1]):
+                pending[w, slot, i] = _sample(r[w, i] + noise[w, row, i], threshold_N,
+                                              full_scale_N, resolution_N)
             if noisy:
                 noise_at[w] += 1
             due[w, slot] = k[w] + lag
@@ -409,21 +421,18 @@ def _electronics(r, noise, noise_at, take, active, k, period, lag, pending, due,
             if 0 <= due[w, j] <= k[w] and (latest < 0 or due[w, j] > due[w, latest]):
                 latest = j
         if latest >= 0:
-            readings[w] = pending[w, latest]
+            for i in range(r.shape[1]):
+                wr[1, w, i] = pending[w, latest, i]
             for j in range(slots):
                 if 0 <= due[w, j] <= k[w]:
                     due[w, j] = -1
 
 
-@njit(cache=True)
-def _sample(reading, noise, threshold_N, full_scale_N, resolution_N):
-    """One sample of the readings: plus the noise, 0 below the threshold (a thin film reads no
+@njit(cache=True, inline="always")
+def _sample(x, threshold_N, full_scale_N, resolution_N):
+    """One sample of a reading (its noise added): 0 below the threshold (a thin film reads no
     tension), clipped to full scale, rounded to the quantum (half to even, as np.round)."""
-    out = reading.copy()
-    for i in range(out.size):
-        x = out[i] + noise[i]
-        x = 0.0 if x < threshold_N else (x if x != x else min(x, full_scale_N))
-        if resolution_N > 0:
-            x = np.rint(x / resolution_N) * resolution_N
-        out[i] = x
-    return out
+    x = 0.0 if x < threshold_N else (x if x != x else min(x, full_scale_N))
+    if resolution_N > 0:
+        x = np.rint(x / resolution_N) * resolution_N
+    return x
