@@ -423,4 +423,8 @@ def test_a_stacked_chain_is_each_worlds_own_chain():
         for w in np.flatnonzero(mask):
             np.testing.assert_array_equal(got[w], worlds[w].step(loads[w]))
         np.testing.assert_array_equal(stacked.readings, [c.readings[0] for c in worlds])
+        # the estimates made with the readings are the bank's inversion of them
+        np.testing.assert_array_equal(stacked.estimates, stacked.bank.load_estimate(
+            stacked.readings.ravel()).reshape(3, 3))
     assert (stacked.readings > 0).any(axis=1).all()  # every world reads a load
+    assert (stacked.estimates > stacked.readings).any()  # a pocket's share is under its load

@@ -263,7 +263,7 @@ class TwoHandTouchEnv(gym.Env):
         # the sensors' noise: its own stream, drawn after the partner's (which it leaves as is)
         self.sensors.reset(np.random.default_rng(int(rng.integers(2**63))))
         self._readings = self.sensors.reading
-        self._estimate = self.sensors.bank.load_estimate(self._readings)
+        self._estimate = self.sensors.estimate
         self._saturated = 0
         self._reset_range_counts()
         self._planned = True
@@ -315,7 +315,7 @@ class TwoHandTouchEnv(gym.Env):
         if not unstable:  # a diverged step keeps the last good forces and readings
             self._forces, self._bone = physics.region_forces()
             self._readings = self.sensors.step(self._forces)
-            self._estimate = self.sensors.bank.load_estimate(self._readings)
+            self._estimate = self.sensors.estimate
             self._saturated = physics.saturated_sensors()
             self._check_range(*physics.contacts_above(self._range), physics.time)
         d = self.data

@@ -295,7 +295,7 @@ class HandshakeVectorEnv(VectorEnv):
         self._forces[ok], self._bone[ok], self._saturated[ok] = forces[ok], bone[ok], saturated[ok]
         readings = self._sensors.step(forces, worlds=ok)
         self._readings[ok] = readings[ok]
-        self._estimate[ok] = self._estimate_of(readings)[ok]
+        self._estimate[ok] = self._sensors.estimates[ok]
         for w in np.flatnonzero(ok):
             env = self.envs[w]
             env._bone = bone[w]
@@ -361,7 +361,7 @@ class HandshakeVectorEnv(VectorEnv):
             self._step_index[w] = 0
             self._sensors.reset(np.random.default_rng(int(rng.integers(2**63))), int(w))
             self._readings[w] = self._sensors.readings[w]
-            self._estimate[w] = self._estimate_of(self._sensors.readings)[w]
+            self._estimate[w] = self._sensors.estimates[w]
             self._forces[w] = self._bone[w] = 0.0
             self._saturated[w] = 0
             env._bone = self._bone[w]
@@ -375,10 +375,6 @@ class HandshakeVectorEnv(VectorEnv):
         else:
             for w in ids:
                 self._worlds.set_world(int(w), self.envs[w].scenario)
-
-    def _estimate_of(self, readings: np.ndarray) -> np.ndarray:
-        """Every world's load estimates (W, regions) from its readings."""
-        return self._sensors.bank.load_estimate(readings.ravel()).reshape(readings.shape)
 
     def _terms(self, action: np.ndarray, time_s: np.ndarray | None = None
                ) -> dict[str, np.ndarray]:

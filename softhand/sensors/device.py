@@ -254,17 +254,22 @@ def _bank_step(load, table, tables, f, qlv, state, active):
     return out
 
 
+@njit(cache=True, inline="always")
+def _estimate_one(i, r, table, tables, f):
+    """Region ``i``'s load estimate from its reading ``r``: np.interp on its law's monotone
+    inverse past the dead band, 0 for a reading of 0 or less; an ideal sensor's is the reading."""
+    a, b = table[i, 0], table[i, 1]
+    if a == b:
+        return r
+    return interp(r, tables[2, a:b], tables[0, a:b]) + f[i, 0] if r > 0 else 0.0
+
+
 @njit(cache=True)
 def _estimate(reading, table, tables, f):
-    """TransferBank.load_estimate, compiled: np.interp on each law's monotone inverse."""
-    u, g_inverse = tables[0], tables[2]
-    out = reading.copy()
+    """TransferBank.load_estimate, compiled: `_estimate_one` of every region."""
+    out = np.empty(reading.size)
     for i in range(reading.size):
-        a, b = table[i]
-        if a == b:
-            continue
-        r = reading[i]
-        out[i] = interp(r, g_inverse[a:b], u[a:b]) + f[i, 0] if r > 0 else 0.0
+        out[i] = _estimate_one(i, reading[i], table, tables, f)
     return out
 
 
@@ -316,9 +321,10 @@ class SensorChain:
         slots = self._lag // self._period + 1
         self.rngs: list[np.random.Generator] = [np.random.default_rng(0)] * worlds
         self._k = np.zeros(worlds, np.int64)
-        # per world and region: the hysteresis' play and the reading; half the band at full load
-        self._wr = np.zeros((2, worlds, regions))
-        self._play, self.readings = self._wr[0], self._wr[1]
+        # per world and region: the hysteresis' play, the reading and the load a calibrated
+        # read-out infers from it (TransferBank.load_estimate); half the band at full load
+        self._wr = np.zeros((3, worlds, regions))
+        self._play, self.readings, self.estimates = self._wr[0], self._wr[1], self._wr[2]
         # each world's noise, drawn from its stream NOISE_BLOCK samples at a time (the same
         # numbers as one draw per sample: a generator's draws run on, whatever their sizes);
         # without noise one row of zeros that every sample adds
@@ -334,6 +340,12 @@ class SensorChain:
         """The current readings: (regions,) for one world, else (W, regions)."""
         return self.readings[0].copy() if self.worlds == 1 else self.readings.copy()
 
+    @property
+    def estimate(self) -> np.ndarray:
+        """The load a calibrated read-out infers from each current reading
+        (TransferBank.load_estimate, made with the reading): shaped as `reading`."""
+        return self.estimates[0].copy() if self.worlds == 1 else self.estimates.copy()
+
     def reset(self, rng: np.random.Generator, world: int = 0) -> None:
         """World ``world`` at rest (no load, nothing sampled), its noise drawn from ``rng``."""
         self.rngs[world] = rng
@@ -341,6 +353,7 @@ class SensorChain:
         self.bank.reset(slice(world * r, (world + 1) * r))
         self._k[world] = 0
         self._play[world] = 0.0
+        self.estimates[world] = 0.0  # a reading of 0 infers no load
         if self.spec.noise_N > 0:
             self._noise_at[world] = self.NOISE_BLOCK  # a new stream: drawn at its first sample
         self._due[world] = -1
@@ -375,8 +388,9 @@ def _chain_step(loads, flags, table, tables, f, qlv, state, wr, noise, noise_at,
     """SensorChain.step of the worlds ``flags[0]`` (those sampling: ``flags[1]``) in one
     compiled call: their regions' transfer laws (TransferBank's `_share`, `_relax`), the
     hysteresis' play operator (``band`` > 0: half its width at full load, narrowing to 0 at no
-    load, as np.clip(play, r - half, r + half)), then `_electronics`. ``wr``: play and
-    readings (2, W, regions); ``noise`` (W, block, regions) from row ``noise_at`` on."""
+    load, as np.clip(play, r - half, r + half)), then `_electronics`, then the load estimates.
+    ``wr``: play, readings and estimates (3, W, regions); ``noise`` (W, block, regions) from row
+    ``noise_at`` on."""
     worlds, regions = loads.shape
     r = np.zeros((worlds, regions))
     for w in range(worlds):
@@ -392,6 +406,10 @@ def _chain_step(loads, flags, table, tables, f, qlv, state, wr, noise, noise_at,
                 r[w, i] = wr[0, w, i]
     _electronics(r, noise, noise_at, flags, k, period, lag, pending, due, wr, threshold_N,
                  full_scale_N, resolution_N)
+    for w in range(worlds):  # what a calibrated read-out infers from the new readings
+        if flags[0, w]:
+            for i in range(regions):
+                wr[2, w, i] = _estimate_one(w * regions + i, wr[1, w, i], table, tables, f)
 
 
 @njit(cache=True)
