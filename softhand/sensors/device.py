@@ -179,7 +179,6 @@ class TransferBank:
         # the tables' u, g(u) and the monotone inverse's g, end to end
         self._tables = np.array([np.concatenate(parts or [np.zeros(0)]) for parts in (
             [sh.u for sh in tables], [sh.g for sh in tables], [sh.inverse.f for sh in tables])])
-        self._every = np.ones(n, bool)
 
     def reset(self, regions: slice | np.ndarray | None = None) -> None:
         """The QLV states of ``regions`` (default all) to rest."""
@@ -191,11 +190,10 @@ class TransferBank:
         `ElasticLaw.force`); an ideal sensor's share is the load."""
         return _shares(np.asarray(load_N, float), self._table, self._tables, self._f)
 
-    def step(self, load_N: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
-        """Readings (N on each patch) after one env step that ends at loads ``load_N``; with
-        ``active`` (a mask of the regions), the others keep their states (and read 0 here)."""
+    def step(self, load_N: np.ndarray) -> np.ndarray:
+        """Readings (N on each patch) after one env step that ends at loads ``load_N``."""
         return _bank_step(np.asarray(load_N, float), self._table, self._tables, self._f,
-                          self._qlv, self._state, self._every if active is None else active)
+                          self._qlv, self._state)
 
     def load_estimate(self, reading_N: np.ndarray) -> np.ndarray:
         """The load a calibrated read-out infers from each reading: the static share inverted on
@@ -244,13 +242,11 @@ def _shares(load, table, tables, f):
 
 
 @njit(cache=True)
-def _bank_step(load, table, tables, f, qlv, state, active):
-    """TransferBank.step: `_share`, then `_relax`, of the ``active`` regions (0 for the
-    others, whose states stay)."""
-    out = np.zeros(load.size)
+def _bank_step(load, table, tables, f, qlv, state):
+    """TransferBank.step: `_share`, then `_relax`, of every region."""
+    out = np.empty(load.size)
     for i in range(load.size):
-        if active[i]:
-            out[i] = _relax(i, _share(i, load[i], table, tables, f), state, qlv, f)
+        out[i] = _relax(i, _share(i, load[i], table, tables, f), state, qlv, f)
     return out
 
 
