@@ -142,7 +142,7 @@ def test_scale_benchmark_times_every_stage_once_and_changes_nothing(tmp_path):
     lists every stage and each vector env's worlds. Its timings are reported, never asserted."""
     import mujoco
 
-    from softhand.bench.scale import STAGES, run_scale_benchmark, step_stages
+    from softhand.bench.scale import STAGES, physics_share, run_scale_benchmark, step_stages
     from softhand.envs.controllers import make_controller
 
     def forces(env):
@@ -165,6 +165,8 @@ def test_scale_benchmark_times_every_stage_once_and_changes_nothing(tmp_path):
     assert 0.0 < us["physics"] < stages["env_step_us"]
     assert sum(us.values()) == pytest.approx(stages["env_step_us"])
     assert 0.0 < stages["python_share"] < 1.0
+    share, step_us = physics_share(env)
+    assert mujoco.mj_step is step and 0.0 < share < 1.0 and step_us > 0.0
     md = run_scale_benchmark(tmp_path, worlds=(1, 2), repeats=1)
     for label, _ in STAGES:
         assert f"| {label} |" in md
