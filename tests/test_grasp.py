@@ -95,14 +95,15 @@ def test_grasp_holds_at_the_corners_of_the_subjects_sizes(dl, dw):
     assert math.isfinite(m["partner_limit_margin_deg"])
 
 
-def test_pruned_residual_and_jacobian_equal_measuring_every_pair():
+def test_pruned_residual_equals_measuring_every_pair_and_its_jacobian_is_the_derivative():
     """The grasp's residual measures only the pairs whose bounding spheres can reach the
-    residual's threshold, and each Jacobian column only the pairs its step moved; both must give
-    the same floating-point numbers as measuring every pair (what the solver did before), at
-    states near and far from the grasp."""
-    from mujoco import minimize
-
-    from softhand.hands.grasp import _FD_EPS, _Problem
+    residual's threshold; it must give the same floating-point numbers as measuring every pair,
+    at states near and far from the grasp. Its analytic Jacobian (bodies' Jacobians, distances'
+    witness points) must be the residual's derivative: against central differences (step 1e-7)
+    each state's Jacobian within 1e-3 in Frobenius norm (measured 3e-10 to 8e-4: the distance
+    routine's witness points of meshes are exact to about 1e-5 relative), and the evaluation with
+    the Jacobian returns the same residual."""
+    from softhand.hands.grasp import _Problem
 
     problem = _Problem(SceneConfig(), GRASP_SETTINGS)
     m, d, s = problem.m, problem.d, problem.s
@@ -132,13 +133,17 @@ def test_pruned_residual_and_jacobian_equal_measuring_every_pair():
         for mine, others in problem.gap_sets:
             expect = [min(every([(g, o) for o in others], 0.05)) for g in mine]
             assert problem.nearest(mine, others) == expect
+        if k % 3:
+            continue
         for contacts in (False, True):
-            r = problem.residual(x, contacts=contacts)[:, None]
-            fun = lambda xh, c=contacts: np.stack(  # noqa: E731
-                [problem.residual(xh[:, j], contacts=c) for j in range(xh.shape[1])], axis=1)
-            expect, _ = minimize.jacobian_fd(fun, x[:, None], r, _FD_EPS, 0,
-                                             [b.reshape(-1, 1) for b in bounds])
-            assert np.array_equal(problem.jacobian(x[:, None], r, contacts), expect)
+            r, jac = problem.residual(x, contacts=contacts, jacobian=True)
+            assert np.array_equal(r, problem.residual(x, contacts=contacts))
+            step = 1e-7 * np.eye(problem.n)
+            central = np.stack([(problem.residual(x + e, contacts=contacts)
+                                 - problem.residual(x - e, contacts=contacts)) / 2e-7
+                                for e in step], axis=1)
+            assert np.linalg.norm(jac - central) <= 1e-3 * np.linalg.norm(central), (k, contacts)
+            assert np.count_nonzero(jac) > 0
     assert checked > 50  # the states include overlapping pairs (measured 1,000 and more)
 
 

@@ -178,9 +178,12 @@ def test_scale_benchmark_times_every_stage_once_and_changes_nothing(tmp_path):
 def test_the_warp_backend_gives_the_cpu_batchs_region_forces():
     """backend="warp": the same worlds on MuJoCo Warp (float32; on a GPU where there is one, else
     Warp's CPU device) against the CPU batch (float64), a whole episode of 2 worlds: each region's
-    peak and mean force within 0.05 N (measured: 0.01 N at most over 3 worlds on Warp's CPU
-    device; single precision shifts the instants of contact events, so single steps differ by up
-    to 2 N where a contact starts). Skipped without MuJoCo Warp (``pip install
+    peak force within 0.05 N and mean force within 0.2 N. Single precision shifts the instants of
+    contact events, so single steps differ by up to 3 N where a contact starts or ends. Measured
+    on Warp's CPU device: peaks within 0.004 N; means within 0.003 N but on world 1's Back1, where
+    the shake makes and breaks a 2.7 N contact 18 times and Warp's lasts one step longer each
+    time: 1.55 against 1.42 N (0.13 N; 0.01 N at most in the grasp before the analytic
+    Jacobian). Skipped without MuJoCo Warp (``pip install
     'softhand[gpu]'``); Warp's kernels compile for about a minute the first time."""
     pytest.importorskip("mujoco_warp", reason="MuJoCo Warp not installed: pip install "
                                               "'softhand[gpu]' (optional; CI has no GPU)")
@@ -201,7 +204,7 @@ def test_the_warp_backend_gives_the_cpu_batchs_region_forces():
     cpu, gpu = forces["cpu"], forces["warp"]
     assert cpu.max() > 5.0  # the hands held each other
     assert np.abs(cpu.max(axis=0) - gpu.max(axis=0)).max() < 0.05
-    assert np.abs(cpu.mean(axis=0) - gpu.mean(axis=0)).max() < 0.05
+    assert np.abs(cpu.mean(axis=0) - gpu.mean(axis=0)).max() < 0.2
 
 
 def test_a_bad_backend_is_refused_in_one_line():
