@@ -231,9 +231,10 @@ def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_
     kin = run.kinematics()
     assert kin["partner_beyond_range_deg"]["max"] < 3.0, kin  # soft limits, 3 deg
     checks = run.grasp_checks()
-    # the palms (thenars included) carry part of the force at mid-shake (measured 15 %); each
-    # thumb pad lies over the other hand's back (its dorsal skin is 15 mm from its mid-plane:
-    # measured 22 and 34 mm); no partner joint reaches a stop while it holds (measured 4.9 deg)
+    # the palms (thenars included) carry part of the force at mid-shake (measured 5.9 %; 9.1 %
+    # in the grasp of finite differences); each thumb pad lies over the other hand's back (its
+    # dorsal skin is 15 mm from its mid-plane: measured 20 and 33 mm); no partner joint reaches a
+    # stop while it holds (measured 4.8 deg)
     assert checks["palm_to_palm_share_pct"] > 5.0, checks
     assert all(v[2] > 15.0 for v in checks["thumb_tip_in_other_mm"].values()), checks
     assert checks["partner_limit_margin_deg"] > 2.0, checks
@@ -252,7 +253,7 @@ def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_
         worst = max(worst, *m["self_penetration_mm"].values())
         if term or trunc:
             break
-    assert np.percentile(errors, 95) < 0.15, np.percentile(errors, 95)  # measured 5.9 %
+    assert np.percentile(errors, 95) < 0.15, np.percentile(errors, 95)  # measured 2.3 %
     assert worst < 1.0, worst  # measured 0.0 mm
 
 
