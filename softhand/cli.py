@@ -852,6 +852,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     click.echo(f"speed: {summary['env_steps_per_s']:.0f} env steps/s ("
                f"{summary['steps_per_s']:.0f} physics steps/s, {frame_skip} per env step), "
                f"{summary['realtime_factor']:.1f}x real time"
+               + (f" (the first step, {summary['first_step_s']:.1f} s, compiled the step's "
+                  "kernels: once per machine)" if summary["first_step_s"] > 1.0 else "")
                + (f"; recording: {record}" if record else ""))
 
 

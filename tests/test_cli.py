@@ -173,6 +173,10 @@ def test_handshake_json_and_recording(tmp_path):
     assert data["rigid_contact_peak_N"] >= 0.0
     assert set(data["over_2N"]) <= set(data["regions"])
     assert data["steps_per_s"] > 0 and data["realtime_factor"] > 0
+    # the speed leaves out the first step (the kernels' one-off compile on a new machine): the
+    # real-time factor is that of the timed steps
+    assert data["first_step_s"] > 0.0
+    assert data["realtime_factor"] == pytest.approx(data["steps_per_s"] * 0.002)
     assert rrd.stat().st_size > 0
     # the JSON says how it was made: seed, version and every setting
     from softhand import __version__

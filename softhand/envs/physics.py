@@ -221,10 +221,11 @@ def contacts_above(d: mujoco.MjData, limits: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(geom pairs (k, 2), normal forces (k,), limits (k,)) of the contacts of ``d`` whose normal
     force exceeds ``limits[geom1, geom2]`` (a geom x geom table; inf where there is no limit)."""
-    if d.ncon == 0:
-        return np.zeros((0, 2), int), np.zeros(0), np.zeros(0)
     con = d.contact
-    return _above(con.geom, con.efc_address, d.efc_force, limits)
+    # contiguous copies, also of no contacts: the kernel sees one array type and compiles once,
+    # on the first step (a view of one contact is C-contiguous, of more only strided)
+    return _above(np.ascontiguousarray(con.geom), np.ascontiguousarray(con.efc_address),
+                  d.efc_force, limits)
 
 
 @njit(cache=True)

@@ -42,6 +42,7 @@ class HandshakeRun:
     region_force_N: np.ndarray
     contacts: list[np.ndarray]
     phase: list[str]
+    #: wall time (s) of the env steps after the first and their physics steps: the speed
     wall_s: float
     steps: int
     model: mujoco.MjModel = field(repr=False)
@@ -73,6 +74,9 @@ class HandshakeRun:
     #: were chosen (softhand.envs.skins.CONTACT_LAWS)
     law_labels: tuple[str, ...] = ()
     contact_laws: str = "geometry"
+    #: wall time of the first env step (s), left out of ``wall_s`` and ``steps``: on a machine's
+    #: first run it compiles the step's kernels (numba, about 7 s once; then read from its cache)
+    first_step_s: float = 0.0
 
     def grasp_checks(self) -> dict:
         """What a hand biomechanist checks (softhand.hands.grasp.grasp_metrics), from the
@@ -275,14 +279,15 @@ class HandshakeRun:
                 "only_softhand": sorted(got - ref)}
 
     def summary(self) -> dict:
-        sim = float(self.time_s[-1])
         rigid = self.rigid_force_N if self.rigid_force_N is not None else np.zeros(1)
         out = {"regions": self.table(), "over_2N": self.over_2n,
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
                 "rigid_contact_peak_N": float(rigid.max()),
                 "force_accounting": self.force_accounting(),
                 "kinematics": self.kinematics(),
-                "steps_per_s": self.steps / self.wall_s, "realtime_factor": sim / self.wall_s,
+                "steps_per_s": self.steps / self.wall_s,
+                "realtime_factor": self.steps * float(self.model.opt.timestep) / self.wall_s,
+                "first_step_s": self.first_step_s,
                 "episode": dict(self.episode), "partner_grip": self.grip_tracking(),
                 "grasp_checks": self.grasp_checks()}
         if self.representations:
@@ -563,12 +568,15 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
     pad_dofs = np.array([m.jnt_dofadr[j] if j >= 0 else 0 for j in pad_joints])
     has_pads = bool((pads >= 0).any())
-    steps, wall = 0, 0.0
+    steps, wall, first = 0, 0.0, None  # the speed leaves out the first step (HandshakeRun)
     while True:
         t0 = time.perf_counter()
         with mujoco_warnings_kept():  # a divergence is raised below, not printed by MuJoCo
             obs, _, term, trunc, info = env.step(policy(obs, info))
-        wall += time.perf_counter() - t0
+        if first is None:
+            first = time.perf_counter() - t0
+        else:
+            wall += time.perf_counter() - t0
         steps += base.frame_skip
         if steps % record_every == 0 or term or trunc:
             frames["t"].append(d.time)
@@ -597,11 +605,14 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
         raise DivergenceError(base.physics.divergence, skins=base.skins,
                               representations=base.representations,
                               timestep_s=float(m.opt.timestep))
+    timed = steps - base.frame_skip  # the physics steps of the timed env steps
+    if timed == 0:  # an episode of one env step: its speed is that step's
+        wall, timed, first = first, steps, 0.0
     q = np.array(frames["q"])
     compression = np.where(pads >= 0, 1e3 * q[:, np.maximum(pads, 0)], np.nan)
     return HandshakeRun(base.region_names, dict(base.skins), np.array(frames["t"]), q,
                         np.array(frames["mp"]), np.array(frames["mq"]), np.array(frames["f"]),
-                        frames["c"], frames["ph"], wall, steps, m, np.array(frames["a"]),
+                        frames["c"], frames["ph"], wall, timed, m, np.array(frames["a"]),
                         np.array(frames["r"]), np.array(frames["acc"]), np.array(frames["sf"]),
                         compression if has_pads else None,
                         np.array(frames["pf"]) if has_pads else None,
@@ -612,4 +623,4 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
                         {"hand": base.hand, "partner_size_mm": list(base.partner_size_mm),
                          "seed": seed, "options": dict(options or {}),
                          "softhand_version": __version__},
-                        tuple(law_labels(base)), base.contact_laws)
+                        tuple(law_labels(base)), base.contact_laws, first)
