@@ -13,7 +13,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "softhand"
 ORDER = ("fem", "laws", "skin", "sensors", "hands", "envs", "viz", "bench", "cli")
 BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "compiled", "data"}
-CLI = {"cli", "cli_inputs"}
+CLI = {"cli"}
 
 
 def _stage(name: str) -> str:

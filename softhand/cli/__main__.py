@@ -1,0 +1,5 @@
+"""``python -m softhand.cli``: the ``softhand`` command."""
+
+from softhand.cli.app import run
+
+run()
