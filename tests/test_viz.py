@@ -294,3 +294,31 @@ def test_pictures_keep_hidden_geoms_hidden_and_wrap_long_captions(tmp_path):
     one, three = (Image.open(tmp_path / f"{n}.png").size for n in ("one", "three"))
     extra = three[1] - one[1]  # 150 characters at 25 a line: 5 more lines of 18 pixels
     assert one[0] == three[0] == 200 and extra == 5 * 18
+
+
+def test_pictures_by_force_colour_each_region_by_its_force():
+    """softhand render and the contact sheet colour the prosthetic's skin by force: a region under
+    2 N grey, over 2 N orange to red, skin without a region grey, a hidden skin geom hidden, the
+    partner's tissue blue."""
+    import mujoco
+
+    from softhand.envs.picture import HAND_COLOURS
+    from softhand.viz.render import _force_colours
+
+    spec = mujoco.MjSpec()
+    body = spec.worldbody.add_body(name="b")
+    for name in ("pro_skin_Palm1", "pro_skin_Back2", "pro_skin_Thenar", "hum_tissue_palm"):
+        body.add_geom(name=name, size=[0.01, 0, 0])
+    body.add_geom(name="pro_skin_Index3", size=[0.01, 0, 0], rgba=[0, 0, 0, 0])
+    model = spec.compile()
+    colours = _force_colours(model, {"pro_skin_Palm1": 1.0, "pro_skin_Back2": 6.0,
+                                     "pro_skin_Index3": 6.0})
+    gid = lambda n: model.geom(n).id  # noqa: E731
+    r, g, b, _ = colours[gid("pro_skin_Palm1")]
+    assert max(r, g, b) - min(r, g, b) < 0.05  # grey
+    r, g, b, _ = colours[gid("pro_skin_Back2")]
+    assert r > 0.6 and g < 0.3 and b < 0.3  # red
+    assert colours[gid("pro_skin_Thenar")][:3] == (0.75, 0.75, 0.75)
+    assert gid("pro_skin_Index3") not in colours
+    assert np.allclose(colours[gid("hum_tissue_palm")][:3], HAND_COLOURS["hum_tissue_"][:3])
+

@@ -321,10 +321,8 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]
         frames = []
         for k, what in ((grip[-1], "end of the grip"), (shake[len(shake) // 2], "mid-shake")):
-            forces = {f"pro_skin_{r}": float(run.region_force_N[k, i])
-                      for i, r in enumerate(run.region_names)}
             frames.append(SheetFrame(run.qpos[k], run.mocap_pos[k], run.mocap_quat[k],
-                                     f"{what}, t = {run.time_s[k]:.2f} s", forces))
+                                     f"{what}, t = {run.time_s[k]:.2f} s", _skin_forces(run, k)))
         render_sheet(run.model, frames, path)
         click.echo(f"wrote {path} (end of the grip and mid-shake, 3 views each)")
         return
@@ -336,6 +334,13 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     view = CameraView(distance_m=distance, azimuth_deg=azimuth, elevation_deg=elevation)
     render_state(run.model, run.qpos[k], run.mocap_pos[k], run.mocap_quat[k], path,
                  width=size[0], height=size[1], view=view,
-                 caption=f"orange: the prosthetic hand's skin; blue: the partner's hand; "
-                         f"t = {run.time_s[k]:.2f} s ({run.phase[k]})")
+                 region_force_N=_skin_forces(run, k),
+                 caption=f"prosthetic skin by force: grey < 2 N, orange-red > 2 N; blue: the "
+                         f"partner's hand; t = {run.time_s[k]:.2f} s ({run.phase[k]})")
     click.echo(f"wrote {path} (t = {run.time_s[k]:.2f} s, {run.phase[k]})")
+
+
+def _skin_forces(run, k: int) -> dict[str, float]:
+    """Each region's skin geom and its force (N) at frame ``k`` of a HandshakeRun."""
+    return {f"pro_skin_{r}": float(run.region_force_N[k, i])
+            for i, r in enumerate(run.region_names)}

@@ -1,11 +1,12 @@
 """Offscreen pictures of the handshake scene, written as PNG.
 
 `render_state` draws one state of the scene (both hands and MuJoCo's contact points) from a
-free camera around the hands; `render_sheet` draws several moments from the back of each
-hand and from below, the prosthetic's regions coloured by their force. The caller hands the states
-over as plain arrays (``qpos`` and the mocap poses), as for the rerun recording. The picture itself
-is made by `softhand.envs.picture.ScenePicture`, the one place for it, which the env's
-``render()`` uses too.
+free camera around the hands, the prosthetic's skin in one colour or by force; `render_sheet`
+draws several moments from the back of each hand and from below, the prosthetic's regions
+coloured by their force. The caller hands the states over as plain arrays (``qpos`` and the
+mocap poses), as for the rerun recording. The picture itself is made by
+`softhand.envs.picture.ScenePicture`, the one place for it, which the env's ``render()`` uses
+too.
 
 Needs an OpenGL context, chosen when mujoco is first imported: set ``MUJOCO_GL=egl`` (or
 ``osmesa``) before that (``softhand render`` does).
@@ -38,10 +39,12 @@ __all__ = ["HAND_COLOURS", "SHEET_VIEWS", "CameraView", "SheetFrame", "render_sh
 def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
                  mocap_quat: np.ndarray, path: str | os.PathLike, *, width: int = 960,
                  height: int = 720, view: CameraView | None = None,
-                 contacts: bool = True, caption: str | None = None) -> Path:
+                 contacts: bool = True, caption: str | None = None,
+                 region_force_N: dict[str, float] | None = None) -> Path:
     """Render one state of the scene to a PNG at ``path`` (written atomically); return the path.
-    The two hands get HAND_COLOURS, on a light BACKGROUND; ``caption``: a line of text under the
-    picture (e.g. which hand is which and when).
+    The two hands get HAND_COLOURS, on a light BACKGROUND; with ``region_force_N`` (skin geom
+    name -> N) the prosthetic's skin is coloured by force instead, as in `render_sheet`;
+    ``caption``: a line of text under the picture (e.g. which hand is which and when).
 
     Raises:
         ValueError: a state that does not fit the model, a size outside [64, 4096] pixels or a
@@ -50,10 +53,29 @@ def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
     target = check_writable_file(path, suffix=".png")
     check_size(width, height)
     data = posed_data(model, qpos, mocap_pos, mocap_quat)
+    colours = None if region_force_N is None else _force_colours(model, region_force_N)
     with ScenePicture(model, width, height) as picture:
-        pixels = picture.draw(data, view or CameraView(), contacts=contacts)
+        pixels = picture.draw(data, view or CameraView(), contacts=contacts, colours=colours)
     _save(target, pixels, caption)
     return target
+
+
+def _force_colours(model: mujoco.MjModel, region_force_N: dict[str, float]
+                   ) -> dict[int, tuple[float, ...]]:
+    """Geom colours of a picture by force: each prosthetic skin region by its force
+    (softhand.viz.recording.force_colors: pale to mid grey under 2 N, orange to red over), its
+    other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); a hidden
+    geom (alpha 0: the skin a flex pad replaces) stays hidden."""
+    from softhand.viz.recording import force_colors
+
+    colours = dict(hand_colours(model, ("hum_tissue_",)))
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        if name.startswith("pro_skin_") and model.geom_rgba[g, 3] > 0.0:  # hidden stays hidden
+            f = region_force_N.get(name)
+            colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
+                          else tuple(force_colors(f) / 255.0))
+    return colours
 
 
 @dataclass(frozen=True)
@@ -86,8 +108,6 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
     (softhand.viz.recording.force_colors: pale to mid grey under 2 N, orange to red over), its
     other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); MuJoCo's
     contact points shown."""
-    from softhand.viz.recording import force_colors
-
     target = check_writable_file(path, suffix=".png")
     check_size(size, size)
     import matplotlib
@@ -97,19 +117,12 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
 
     fig, axes = plt.subplots(len(frames), len(SHEET_VIEWS), squeeze=False,
                              figsize=(3.2 * len(SHEET_VIEWS), 3.3 * len(frames)))
-    partner = hand_colours(model, ("hum_tissue_",))  # blue, as in every picture
     with ScenePicture(model, size, size) as picture:
         for row, frame in zip(axes, frames, strict=True):
             data = posed_data(model, frame.qpos, frame.mocap_pos, frame.mocap_quat)
             palms = [model.body(b).id for b in ("pro_palm", "hum_palm")]
             lookat = tuple(np.mean(data.xpos[palms], axis=0))
-            colours = dict(partner)
-            for g in range(model.ngeom):
-                name = model.geom(g).name
-                if name.startswith("pro_skin_"):
-                    f = frame.region_force_N.get(name)
-                    colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
-                                  else tuple(force_colors(f) / 255.0))
+            colours = _force_colours(model, frame.region_force_N)
             for ax, (title, (az, el)) in zip(row, SHEET_VIEWS.items(), strict=True):
                 view = CameraView(lookat=lookat, distance_m=distance_m, azimuth_deg=az,
                                   elevation_deg=el)
