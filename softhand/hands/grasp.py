@@ -176,7 +176,7 @@ class _Problem:
         pos0, quat0 = _web_to_web_pose(config, self.pro, self.hum)
         spec = scene_spec(config, partner_pose=(pos0, quat0))
         m = spec.compile()
-        m.opt.ccd_tolerance = 1e-6  # smooth distances for finite differences
+        m.opt.ccd_tolerance = 1e-6  # accurate distances and witness points (the Jacobian)
         self.m, self.d = m, mujoco.MjData(m)
         self.pos0, self.quat0 = pos0, quat0
         name = lambda i: m.geom(i).name  # noqa: E731
