@@ -32,7 +32,7 @@ along the kinematic tree).
 The default blueprint opens where the hands touch: the time panel selects the contact phase
 (the frames whose total force is at least 5 % of its peak) and plays it in a loop, the 3D view
 looks at the two palms at the peak from ``softhand render``'s default angle
-(`softhand.viz.render.CameraView`), and the force plot lists only the regions that carry
+(`softhand.envs.picture.CameraView`), and the force plot lists only the regions that carry
 load (over ``LOADED_N``); the regions that never do are named in ``skin/designs``.
 """
 
@@ -52,7 +52,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
-from softhand.envs.picture import hand_colours
+from softhand.envs.picture import CameraView, hand_colours
 from softhand.hands import regions
 from softhand.io import check_writable_file
 from softhand.laws.fit import REFERENCE_FORCE_N
@@ -314,8 +314,6 @@ def _contact_window(frames: HandshakeFrames) -> tuple[float, float, int]:
 def _eye(model: mujoco.MjModel, frames: HandshakeFrames, frame: int) -> rrb.EyeControls3D:
     """The 3D view's eye: ``softhand render``'s default angle and distance, looking at the
     midpoint of the two palms at ``frame``."""
-    from softhand.viz.render import CameraView
-
     palms = [model.body(name).id for _, name in _HANDS.values()]
     data = mujoco.MjData(model)
     data.qpos[:] = frames.qpos[frame]
