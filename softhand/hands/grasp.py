@@ -235,6 +235,7 @@ class _Problem:
         self.prior = np.clip(self.prior, *self.bounds)
         self.n = 6 + n_hum + n_pro
         self.geom_body = m.geom_bodyid.copy()
+        self.arm_dof = int(m.jnt_dofadr[m.joint("hum_arm").id])
         self.dq_dx = self._joint_dofs()
 
     def starts(self):
@@ -274,8 +275,7 @@ class _Problem:
                   if int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE),
                                             int(mujoco.mjtJoint.mjJNT_SLIDE))}
         q = np.zeros((m.nv, self.n))
-        arm = int(m.jnt_dofadr[m.joint("hum_arm").id])
-        self.arm_dof = arm
+        arm = self.arm_dof
         q[arm:arm + 3, :3] = np.eye(3)  # a free joint's linear velocity is in the world frame
         n_hum = len(self.hum_qpos)
         for k, a in enumerate(self.hum_qpos):
