@@ -168,20 +168,22 @@ env = RenderCollection(gym.make("softhand/Handshake-v0", render_mode="rgb_array"
 plain = gym.make("softhand/Handshake-v0")
 obs, info = env.reset(seed=0)
 same, _ = plain.reset(seed=0)
-for _ in range(60):  # rendering every step: the episode is the same
-    obs, *_ = env.step(np.full(6, 0.2, np.float32))
+for _ in range(150):  # rendering every step: the episode is the same (into the grip)
+    obs, _, _, _, info = env.step(np.full(6, 0.2, np.float32))
     same, *_ = plain.step(np.full(6, 0.2, np.float32))
     assert np.array_equal(obs, same)
 frames = env.render()
-assert len(frames) == 61, len(frames)
+assert len(frames) == 151, len(frames)
 picture = frames[-1]
 assert picture.shape == (240, 320, 3) and picture.dtype == np.uint8, picture.shape
 assert len({tuple(p) for p in picture.reshape(-1, 3)[::97]}) > 20  # a picture, not a blank
 base = env.unwrapped
 d = base.data
 path = sys.argv[1]
+forces = {g: info["region_forces_N"][r] for g, r in zip(base.region_geoms, base.region_names)}
+assert max(forces.values()) > 0.0  # the skin is coloured by a force
 render_state(base.model, d.qpos, d.mocap_pos, d.mocap_quat, path, width=320, height=240,
-             view=RENDER_VIEW)
+             view=RENDER_VIEW, region_force_N=forces)
 png = np.round(plt.imread(path)[..., :3] * 255).astype(np.uint8)
 assert np.array_equal(png, picture), np.abs(png.astype(int) - picture).max()
 env.close()
@@ -194,8 +196,8 @@ print("ok")
 def test_rgb_array_is_softhand_renders_picture_and_wrappers_take_it(tmp_path):
     """Offscreen, in a process of its own (MUJOCO_GL is read when mujoco is imported):
     RenderCollection gathers a picture per step without changing the episode; the last is
-    pixel for pixel the PNG ``softhand render``'s code writes of the same state; close() frees
-    the renderer."""
+    pixel for pixel the PNG ``softhand render``'s code writes of the same state, the skin
+    coloured by the same region forces; close() frees the renderer."""
     script = tmp_path / "render.py"
     script.write_text(_RENDER_SCRIPT)
     res = subprocess.run([sys.executable, str(script), str(tmp_path / "state.png")],

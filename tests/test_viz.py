@@ -302,8 +302,7 @@ def test_pictures_by_force_colour_each_region_by_its_force():
     partner's tissue blue."""
     import mujoco
 
-    from softhand.envs.picture import HAND_COLOURS
-    from softhand.viz.render import _force_colours
+    from softhand.envs.picture import HAND_COLOURS, region_colours
 
     spec = mujoco.MjSpec()
     body = spec.worldbody.add_body(name="b")
@@ -311,7 +310,7 @@ def test_pictures_by_force_colour_each_region_by_its_force():
         body.add_geom(name=name, size=[0.01, 0, 0])
     body.add_geom(name="pro_skin_Index3", size=[0.01, 0, 0], rgba=[0, 0, 0, 0])
     model = spec.compile()
-    colours = _force_colours(model, {"pro_skin_Palm1": 1.0, "pro_skin_Back2": 6.0,
+    colours = region_colours(model, {"pro_skin_Palm1": 1.0, "pro_skin_Back2": 6.0,
                                      "pro_skin_Index3": 6.0})
     gid = lambda n: model.geom(n).id  # noqa: E731
     r, g, b, _ = colours[gid("pro_skin_Palm1")]

@@ -12,13 +12,17 @@ Needs an OpenGL context, chosen when mujoco is first imported: set ``MUJOCO_GL=e
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
-__all__ = ["BACKGROUND", "CONTACT_COLOUR", "HAND_COLOURS", "RENDER_VIEW", "CameraView",
-           "ScenePicture", "check_size", "hand_colours", "posed_data"]
+from softhand.laws.fit import REFERENCE_FORCE_N
+
+__all__ = ["BACKGROUND", "CONTACT_COLOUR", "HAND_COLOURS", "RENDER_VIEW", "STANDOUT_FORCE_N",
+           "CameraView", "ScenePicture", "check_size", "force_colors", "hand_colours",
+           "posed_data", "region_colours"]
 
 #: Background of every picture (RGB, 0-255): light, so that pictures print and read in documents.
 BACKGROUND = (244, 244, 240)
@@ -26,6 +30,12 @@ BACKGROUND = (244, 244, 240)
 CONTACT_COLOUR = (0.75, 0.0, 0.55, 1.0)
 #: Colour of each hand's soft geoms in a picture (by name prefix): prosthetic skin, partner tissue.
 HAND_COLOURS = {"pro_skin_": (0.95, 0.62, 0.32, 0.85), "hum_tissue_": (0.25, 0.5, 0.9, 0.8)}
+#: Fig. 4 of the paper marks the regions whose handshake force exceeds 2 N
+#: (``paper()["handshake"]["over_2N"]``); above it the force colours turn warm.
+STANDOUT_FORCE_N = REFERENCE_FORCE_N
+#: Force colour ramps (RGB): 0 N -> STANDOUT_FORCE_N pale to mid grey; above it orange to red.
+_COOL = (np.array([225.0, 222.0, 215.0]), np.array([115.0, 118.0, 125.0]))
+_WARM = (np.array([255.0, 170.0, 0.0]), np.array([200.0, 0.0, 0.0]))
 #: Picture sizes allowed (pixels, each side).
 SIZE_RANGE = (64, 4096)
 
@@ -163,3 +173,48 @@ class ScenePicture:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def force_colors(
+    force_N: np.ndarray | float, *, max_force_N: float = 5.0, standout_N: float = STANDOUT_FORCE_N
+) -> np.ndarray:
+    """RGBA colours (uint8, shape ``force_N.shape + (4,)``) for normal forces.
+
+    From 0 N to ``standout_N`` a grey ramp, pale to mid grey; above ``standout_N`` a warm ramp,
+    orange to red at ``max_force_N`` and beyond, so that regions over 2 N stand out (no blue: blue
+    is the partner's hand in every picture).
+
+    Raises:
+        ValueError: if ``max_force_N`` or ``standout_N`` is not a positive finite number.
+    """
+    for name, value in (("max_force_N", max_force_N), ("standout_N", standout_N)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} = {value}: expected a positive finite force in N")
+    f = np.asarray(force_N, dtype=float)
+    cool = np.clip(f / standout_N, 0.0, 1.0)[..., None]
+    span = max_force_N - standout_N
+    warm = (np.clip((f - standout_N) / span, 0.0, 1.0) if span > 0 else np.ones_like(f))[..., None]
+    rgb = np.where(
+        (f > standout_N)[..., None],
+        _WARM[0] + warm * (_WARM[1] - _WARM[0]),
+        _COOL[0] + cool * (_COOL[1] - _COOL[0]),
+    )
+    alpha = np.full(f.shape + (1,), 255.0)
+    return np.round(np.concatenate([rgb, alpha], axis=-1)).astype(np.uint8)
+
+
+def region_colours(model: mujoco.MjModel, region_force_N: dict[str, float]
+                   ) -> dict[int, tuple[float, ...]]:
+    """Geom colours of a picture by force (`ScenePicture.draw`'s ``colours``): each prosthetic
+    skin region by its force (`force_colors`: pale to mid grey under 2 N, orange to red over),
+    its other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); a hidden
+    geom (alpha 0: the skin a flex pad replaces) stays hidden. ``region_force_N``: skin geom
+    name -> N."""
+    colours = dict(hand_colours(model, ("hum_tissue_",)))
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        if name.startswith("pro_skin_") and model.geom_rgba[g, 3] > 0.0:
+            f = region_force_N.get(name)
+            colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
+                          else tuple(force_colors(f) / 255.0))
+    return colours

@@ -24,7 +24,14 @@ from softhand.compiled import count_above, within
 from softhand.envs.models import skinned_scene_spec
 from softhand.envs.partner import check_partner_size, check_reset_options
 from softhand.envs.physics import MujocoPhysics
-from softhand.envs.picture import RENDER_VIEW, CameraView, ScenePicture, check_size, posed_data
+from softhand.envs.picture import (
+    RENDER_VIEW,
+    CameraView,
+    ScenePicture,
+    check_size,
+    posed_data,
+    region_colours,
+)
 from softhand.envs.scenario import Scenario
 from softhand.envs.sensing import parse_placements, region_laws
 from softhand.envs.skins import (
@@ -353,7 +360,8 @@ class TwoHandTouchEnv(gym.Env):
     def render(self) -> np.ndarray:
         """The current state as an (H, W, 3) uint8 picture (``render_mode="rgb_array"``),
         ``render_size`` (W, H) pixels from ``render_view``: ``softhand render``'s picture, made
-        by the same code (`ScenePicture`), without its caption.
+        by the same code (`ScenePicture`), without its caption: the prosthetic's skin coloured by
+        each region's force at the last step (`region_colours`), the partner's hand blue.
         The renderer is made at the first call and freed by `close`; it draws a copy of
         the state, so rendering never changes the episode.
 
@@ -369,7 +377,9 @@ class TwoHandTouchEnv(gym.Env):
             self._picture_data = mujoco.MjData(self.model)
         d = self.data
         state = posed_data(self.model, d.qpos, d.mocap_pos, d.mocap_quat, self._picture_data)
-        return self._picture.draw(state, self.render_view)
+        colours = region_colours(self.model, dict(zip(self.region_geoms, self._forces.tolist(),
+                                                      strict=True)))
+        return self._picture.draw(state, self.render_view, colours=colours)
 
     # --- helpers -----------------------------------------------------------------------------
     def _check_open(self) -> None:

@@ -52,10 +52,9 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
-from softhand.envs.picture import CameraView, hand_colours
+from softhand.envs.picture import STANDOUT_FORCE_N, CameraView, force_colors, hand_colours
 from softhand.hands import regions
 from softhand.io import check_writable_file
-from softhand.laws.fit import REFERENCE_FORCE_N
 
 __all__ = [
     "ARROW_M_PER_N",
@@ -70,17 +69,11 @@ __all__ = [
 
 #: Name prefixes of the bodies drawn: the prosthetic hand and the partner hand.
 HAND_PREFIXES: tuple[str, ...] = ("pro_", "hum_")
-#: Fig. 4 of the paper marks the regions whose handshake force exceeds 2 N
-#: (``paper()["handshake"]["over_2N"]``); above it the force colours turn warm.
-STANDOUT_FORCE_N = REFERENCE_FORCE_N
 #: Length of a contact-normal arrow per newton of normal force (m/N).
 ARROW_M_PER_N = 0.01
 #: Contact point radius (m) at 0 N and its increase at max_force_N (large enough to show through
 #: the skin surface they lie on).
 _POINT_RADIUS_M = (0.003, 0.004)
-#: Force colour ramps (RGB): 0 N -> STANDOUT_FORCE_N pale to blue; above it orange to red.
-_COOL = (np.array([225.0, 222.0, 215.0]), np.array([115.0, 118.0, 125.0]))
-_WARM = (np.array([255.0, 170.0, 0.0]), np.array([200.0, 0.0, 0.0]))
 _TIMELINE = "sim_time"
 #: A region whose force never exceeds this (N) is left out of the force plot and unlabelled.
 LOADED_N = 0.05
@@ -197,34 +190,6 @@ def _checked(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray
         where = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
         raise ValueError(f"{name}: non-finite value {arr[where]} at index {where}")
     return arr
-
-
-def force_colors(
-    force_N: np.ndarray | float, *, max_force_N: float = 5.0, standout_N: float = STANDOUT_FORCE_N
-) -> np.ndarray:
-    """RGBA colours (uint8, shape ``force_N.shape + (4,)``) for normal forces.
-
-    From 0 N to ``standout_N`` a grey ramp, pale to mid grey; above ``standout_N`` a warm ramp,
-    orange to red at ``max_force_N`` and beyond, so that regions over 2 N stand out (no blue: blue
-    is the partner's hand in every picture).
-
-    Raises:
-        ValueError: if ``max_force_N`` or ``standout_N`` is not a positive finite number.
-    """
-    for name, value in (("max_force_N", max_force_N), ("standout_N", standout_N)):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} = {value}: expected a positive finite force in N")
-    f = np.asarray(force_N, dtype=float)
-    cool = np.clip(f / standout_N, 0.0, 1.0)[..., None]
-    span = max_force_N - standout_N
-    warm = (np.clip((f - standout_N) / span, 0.0, 1.0) if span > 0 else np.ones_like(f))[..., None]
-    rgb = np.where(
-        (f > standout_N)[..., None],
-        _WARM[0] + warm * (_WARM[1] - _WARM[0]),
-        _COOL[0] + cool * (_COOL[1] - _COOL[0]),
-    )
-    alpha = np.full(f.shape + (1,), 255.0)
-    return np.round(np.concatenate([rgb, alpha], axis=-1)).astype(np.uint8)
 
 
 def _path(*parts: str) -> str:

@@ -27,8 +27,8 @@ from softhand.envs.picture import (
     CameraView,
     ScenePicture,
     check_size,
-    hand_colours,
     posed_data,
+    region_colours,
 )
 from softhand.io import atomic_open, check_writable_file
 
@@ -53,29 +53,11 @@ def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
     target = check_writable_file(path, suffix=".png")
     check_size(width, height)
     data = posed_data(model, qpos, mocap_pos, mocap_quat)
-    colours = None if region_force_N is None else _force_colours(model, region_force_N)
+    colours = None if region_force_N is None else region_colours(model, region_force_N)
     with ScenePicture(model, width, height) as picture:
         pixels = picture.draw(data, view or CameraView(), contacts=contacts, colours=colours)
     _save(target, pixels, caption)
     return target
-
-
-def _force_colours(model: mujoco.MjModel, region_force_N: dict[str, float]
-                   ) -> dict[int, tuple[float, ...]]:
-    """Geom colours of a picture by force: each prosthetic skin region by its force
-    (softhand.viz.recording.force_colors: pale to mid grey under 2 N, orange to red over), its
-    other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); a hidden
-    geom (alpha 0: the skin a flex pad replaces) stays hidden."""
-    from softhand.viz.recording import force_colors
-
-    colours = dict(hand_colours(model, ("hum_tissue_",)))
-    for g in range(model.ngeom):
-        name = model.geom(g).name
-        if name.startswith("pro_skin_") and model.geom_rgba[g, 3] > 0.0:  # hidden stays hidden
-            f = region_force_N.get(name)
-            colours[g] = ((0.75, 0.75, 0.75, 0.9) if f is None
-                          else tuple(force_colors(f) / 255.0))
-    return colours
 
 
 @dataclass(frozen=True)
@@ -85,7 +67,7 @@ class SheetFrame:
     Attributes:
         qpos, mocap_pos, mocap_quat: the state.
         label: e.g. "grip, t = 1.05 s".
-        region_force_N: skin geom name -> force (N); the geom is coloured by force_colors().
+        region_force_N: skin geom name -> force (N); the geom is coloured by region_colours().
     """
 
     qpos: np.ndarray
@@ -105,7 +87,7 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
                  size: int = 480, distance_m: float = 0.3, contacts: bool = True) -> Path:
     """A contact sheet (PNG, atomic): one row per frame, one column per SHEET_VIEWS view, looking at
     the midpoint of the two palms. The prosthetic's skin regions are coloured by their force
-    (softhand.viz.recording.force_colors: pale to mid grey under 2 N, orange to red over), its
+    (softhand.envs.picture.region_colours: pale to mid grey under 2 N, orange to red over), its
     other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); MuJoCo's
     contact points shown."""
     target = check_writable_file(path, suffix=".png")
@@ -122,7 +104,7 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
             data = posed_data(model, frame.qpos, frame.mocap_pos, frame.mocap_quat)
             palms = [model.body(b).id for b in ("pro_palm", "hum_palm")]
             lookat = tuple(np.mean(data.xpos[palms], axis=0))
-            colours = _force_colours(model, frame.region_force_N)
+            colours = region_colours(model, frame.region_force_N)
             for ax, (title, (az, el)) in zip(row, SHEET_VIEWS.items(), strict=True):
                 view = CameraView(lookat=lookat, distance_m=distance_m, azimuth_deg=az,
                                   elevation_deg=el)
