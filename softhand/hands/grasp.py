@@ -237,6 +237,8 @@ class _Problem:
         self.geom_body = m.geom_bodyid.copy()
         self.arm_dof = int(m.jnt_dofadr[m.joint("hum_arm").id])
         self.dq_dx = self._joint_dofs()
+        # the distances of the state last set, with their witness points (`_measure`)
+        self._measured: tuple[bytes, bool, _Measured] | None = None
 
     def starts(self):
         """Starting points: the relaxed prior at the configured crossing, then the partner turned
@@ -257,6 +259,7 @@ class _Problem:
 
     def set_state(self, x: np.ndarray) -> None:
         m, d = self.m, self.d
+        self._measured = None  # the distances measured belong to the state before
         d.qpos[:] = m.qpos0
         pos, quat = self.pose(x)
         d.qpos[self.arm_qpos:self.arm_qpos + 3] = pos
@@ -371,10 +374,42 @@ class _Problem:
         return self.hand_point(body, local)
 
     # --- residuals -----------------------------------------------------------------------------
+    def _pair_terms(self) -> tuple:
+        """The overlap terms, weight * max(0, offset - dist) (offset None: -dist): (pairs, cap,
+        threshold of the pruning, weight, offset) of soft pieces overlapping deeper than
+        max_depth_m, bones closer than bone_clearance_m, pieces of one hand overlapping."""
+        s = self.s
+        return ((self.soft_pairs, 0.01, -s.max_depth_m, 10.0, -s.max_depth_m),
+                (self.bone_pairs, 0.02, s.bone_clearance_m, 10.0, s.bone_clearance_m),
+                (self.self_pairs, 0.01, 0.0, 3.0, None))
+
+    def _measure(self, x: np.ndarray, contacts: bool) -> _Measured:
+        """The residual's distances at ``x``, with their witness points; the state is set to
+        ``x``. Measured once per state: mujoco.minimize asks for the Jacobian at the point whose
+        residual it has just evaluated, and the Jacobian is made from the same distances."""
+        key = (np.asarray(x, float).tobytes(), contacts)
+        if self._measured is not None and self._measured[:2] == key:
+            return self._measured[2]
+        self.set_state(x)
+        palms = []
+        for g in self.pro_palms:
+            palms.append((self.distance(g, self.hum_palm), self.dist.copy()))
+        gaps = []
+        for mine, others in self.gap_sets:
+            near: list = []
+            gaps.append((self.nearest(mine, others, witness=near), near))
+        pairs = []
+        for pair_set, cap, above, _, _ in self._pair_terms() if contacts else ():
+            witness = np.zeros((len(pair_set), 6))
+            pairs.append((self.distances(pair_set, cap, above, witness), witness))
+        measured = _Measured(palms, gaps, pairs)
+        self._measured = (*key, measured)
+        return measured
+
     def residual(self, x: np.ndarray, *, contacts: bool, jacobian: bool = False):
         """The residuals at ``x`` (module docstring's targets); with ``jacobian``, (residuals,
-        their Jacobian (len(r), n)) (`jacobian`)."""
-        self.set_state(x)
+        their Jacobian (len(r), n)) (`jacobian`). Sets the state to ``x``."""
+        measured = self._measure(x, contacts)
         s, d = self.s, self.d
         k = _Kinematics(self, x) if jacobian else None
         r: list[float] = []
@@ -385,17 +420,10 @@ class _Problem:
             if k is not None:
                 rows.append(np.zeros((len(values), self.n)) if grads is None else grads)
 
-        def hinge(values: np.ndarray, scale: float, grads: np.ndarray | None):
-            """scale * max(0, values) and its gradient (grads: d values/dx)."""
-            active = values > 0.0
-            return (list(scale * np.maximum(0.0, values)),
-                    None if k is None else scale * active[:, None] * grads)
-
         # palms: both prosthetic palmar quarters pressed press_m into the partner's palm
-        for g in self.pro_palms:
-            dist = self.distance(g, self.hum_palm)
+        for g, (dist, witness) in zip(self.pro_palms, measured.palms, strict=True):
             add([5.0 * (dist + s.press_m)],
-                None if k is None else 5.0 * k.distance(g, self.hum_palm, dist, self.dist)[None])
+                None if k is None else 5.0 * k.distance(g, self.hum_palm, dist, witness)[None])
         z_pro = d.xmat[self.pro_palm_body].reshape(3, 3)[:, 2]
         z_hum = d.xmat[self.hum_palm_body].reshape(3, 3)[:, 2]
         add(list(0.02 * (z_pro + z_hum)), None if k is None else 0.02 * (
@@ -421,31 +449,35 @@ class _Problem:
                 add([0.2 * max(0.0, -z)], None if k is None or z >= 0.0 else -0.2 * k.in_frame(
                     palm, pad, k.point(self.pads[mine, f][0], pad))[2:])
         # every phalanx touches the other hand (gap beyond the press is penalised)
-        for mine, others in self.gap_sets:
-            near: list | None = [] if k is not None else None
-            gaps = self.nearest(mine, others, witness=near)
-            for g, gap, arg in zip(mine, gaps, near or [None] * len(mine), strict=True):
+        for (mine, _), (gaps, near) in zip(self.gap_sets, measured.gaps, strict=True):
+            for g, gap, arg in zip(mine, gaps, near, strict=True):
                 active = gap + s.press_m > 0.0 and arg is not None
                 add([0.3 * max(0.0, gap + s.press_m)], 0.3 * k.distance(
                     g, arg[0], gap, arg[1])[None] if k is not None and active else None)
-        if contacts:
-            # weight * max(0, offset - dist): soft pieces overlapping deeper than max_depth_m,
-            # bones closer than bone_clearance_m, pieces of one hand overlapping
-            for pairs, cap, above, weight, offset in (
-                    (self.soft_pairs, 0.01, -s.max_depth_m, 10.0, -s.max_depth_m),
-                    (self.bone_pairs, 0.02, s.bone_clearance_m, 10.0, s.bone_clearance_m),
-                    (self.self_pairs, 0.01, 0.0, 3.0, None)):
-                witness = np.zeros((len(pairs), 6)) if k is not None else None
-                dist = self.distances(pairs, cap, above, witness)
-                values = -dist if offset is None else offset - dist
-                grads = None if k is None else -k.distances(pairs, dist, witness, values > 0.0)
-                add(*hinge(values, weight, grads))
+        for (pairs, _, _, weight, offset), (dist, witness) in zip(  # none without contacts
+                self._pair_terms() if measured.pairs else (), measured.pairs, strict=True):
+            values = -dist if offset is None else offset - dist
+            active = values > 0.0
+            add(list(weight * np.maximum(0.0, values)), None if k is None else
+                -weight * active[:, None] * k.distances(pairs, dist, witness, active))
         add(list(0.01 * (x[6:] - self.prior[6:])),
             None if k is None else 0.01 * np.eye(self.n)[6:])
         add(list(0.005 * x[3:6]), None if k is None else 0.005 * np.eye(self.n)[3:6])
         if k is None:
             return np.asarray(r)
         return np.asarray(r), np.concatenate(rows)
+
+
+@dataclass
+class _Measured:
+    """The distances of one state of `_Problem`, with their witness points (6: on the first geom,
+    on the second): the palms' (distance, witness); per gap set, (the nearest gaps, per geom its
+    nearest geom and witness or None); per overlap term (`_Problem._pair_terms`, with contacts),
+    (distances, witness rows)."""
+
+    palms: list[tuple[float, np.ndarray]]
+    gaps: list[tuple[list[float], list]]
+    pairs: list[tuple[np.ndarray, np.ndarray]]
 
 
 class _Kinematics:
