@@ -425,7 +425,7 @@ def test_step_after_the_episode_ended_asks_for_reset(env):
     while not truncated:
         _, _, terminated, truncated, _ = env.step(np.zeros(6, np.float32))
         assert not terminated
-    with pytest.raises(RuntimeError, match=r"the episode is over \(truncated at t = 3\.\d+ s\): "
+    with pytest.raises(RuntimeError, match=r"the episode is over \(truncated at t = 4\.\d+ s\): "
                                            r"call reset\(\) before step\(\)"):
         env.step(np.zeros(6))
     obs, _ = env.reset(seed=np.int64(2))  # numpy integers are seeds too; valid input still works

@@ -51,7 +51,7 @@ def test_the_reward_kernel_is_the_documented_formula():
     overload = rng.uniform(3, 12, worlds)
     got = handshake_reward(f, action, phase, grip, weights, overload)
     # the module docstring's reward, in numpy
-    engaged = (phase == PHASES.index("grip")) | (phase == PHASES.index("shake"))
+    engaged = np.isin(phase, [PHASES.index(p) for p in ("grip", "shake", "hold")])
     touched = f > CONTACT_N
     count = touched.sum(axis=1)
     mean = np.where(touched, f, 0.0).sum(axis=1) / np.maximum(count, 1)

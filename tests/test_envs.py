@@ -21,6 +21,7 @@ from softhand.envs.run import (
     sphere_overlap_area,
 )
 from softhand.envs.skins import SKIN_CHOICES, parse_skins
+from softhand.hands import ArmConfig
 from softhand.hands.constants import PROSTHETIC
 from softhand.skin.files import SKINS_DIR
 
@@ -223,9 +224,9 @@ def test_default_handshake_accounts_for_every_newton_and_the_partner_grips_like_
     run = run_handshake(seed=0)
     acc = run.force_accounting()
     assert acc["tissue_law_only_Ns"] == 0.0 and acc["no_law_Ns"] == 0.0  # no bare shell
-    # measured 97.98 % with the geometry laws (Back2 reaches 7.55 N under a partner's thumb, past
-    # the tissue's 7 N data; 98.17 % in the grasp of finite differences before the analytic
-    # Jacobian), 99.04 % with the plate laws
+    # measured 100.0 % with the geometry laws on the arms (Back2 peaks at 7.0 N under the
+    # partner's thumb metacarpal); 97.98 % on the fixed sensored hand before them, 94.2 % on a
+    # prosthesis user's arm of 300 N/m (Back2 8-9 N, past the tissue's 7 N of data)
     assert acc["calibrated_share_pct"] >= 97.5, acc
     assert acc["bone_on_bone_Ns"] == 0.0 and acc["bone_on_bone_peak_N"] == 0.0, acc
     kin = run.kinematics()
@@ -379,15 +380,19 @@ def test_bone_bottoming_out_under_a_region_is_in_its_reading():
     regions over those bones (``info["region_bone_N"]``, part of ``region_forces_N``), the
     overload term sees it and it counts as beyond calibration. The thumb's metacarpal lies under
     the thenar, which no paper region senses: its bone contact is unsensed, as its skin's is
-    (measured at the peak: 16.5 N in Index2, and 12.9 N on the thumb's metacarpal)."""
-    env = HandshakeEnv()
+    (measured at the peak: 16.5 N in Index2, and 12.9 N on the thumb's metacarpal, on arms that
+    did not yield). The arms are made stiff (5 kN/m, 50 N m/rad): on the default ones the hands
+    give way and the bones never meet."""
+    stiff = {"stiffness_n_per_m": 5000.0, "rot_stiffness_nm_per_rad": 50.0}
+    env = HandshakeEnv(sensored_arm=ArmConfig.of("prosthesis-user", **stiff),
+                       partner_arm=ArmConfig.of("active", **stiff))
     _, info = env.reset(seed=0)
     m, d = env.model, env.data
     bones = {g for g in range(m.ngeom) if m.geom(g).name.startswith("pro_bone")
              and m.geom(g).name != "pro_bone_thumb_metacarpal"}
     peak = (0.0, None)
     while True:
-        action = np.ones(6) if info["phase"] in ("grip", "shake") else np.zeros(6)
+        action = np.ones(6) if info["phase"] in ("grip", "shake", "hold") else np.zeros(6)
         _, _, term, trunc, info = env.step(action)
         contact = sum(d.efc_force[c.efc_address] for c in d.contact
                       if c.efc_address >= 0 and (c.geom[0] in bones or c.geom[1] in bones))
@@ -430,7 +435,9 @@ def test_human_hand_runs_the_papers_protocol_whatever_the_action():
         forces.append(np.array(trace))
     np.testing.assert_array_equal(forces[0], forces[1])
     acc = run_handshake(env=env, seed=0).force_accounting()
-    assert acc["calibrated_share_pct"] >= 99.0 and acc["bone_on_bone_peak_N"] == 0.0, acc
+    # measured 98.0 % on the arms (99+ % on a fixed hand before them; the rest beyond the
+    # tissue's 7 N of data)
+    assert acc["calibrated_share_pct"] >= 97.5 and acc["bone_on_bone_peak_N"] == 0.0, acc
 
 
 @pytest.mark.parametrize("kwargs, needle", [

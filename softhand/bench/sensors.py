@@ -159,6 +159,7 @@ def _handshake(placement: str, controller: str = "neutral", signal: str = "conta
                design: str = HANDSHAKE_DESIGN, ideal: bool = False, **settings) -> dict[str, Any]:
     from dataclasses import replace
 
+    from softhand.envs.partner import HOLDING
     from softhand.envs.run import run_handshake
     from softhand.sensors.device import FLEXIFORCE_A101
 
@@ -166,7 +167,7 @@ def _handshake(placement: str, controller: str = "neutral", signal: str = "conta
                     resolution_N=0.0) if ideal else FLEXIFORCE_A101)
     run = run_handshake(design=design, controller=controller, signal=signal,
                         sensor_placement=placement, controller_settings=settings, sensor=spec)
-    grip = np.array([p in ("grip", "shake") for p in run.phase])
+    grip = np.array([p in HOLDING for p in run.phase])
     digit = {d: np.max([run.region_force_N[:, i] for i, r in enumerate(run.region_names)
                         if r.startswith(d)], axis=0) for d in DIGITS}
     return {"regions": run.table(),

@@ -31,6 +31,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from softhand.envs.partner import HOLDING, RELEASING
 from softhand.validate import check_number
 
 __all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClose",
@@ -56,11 +57,11 @@ def _check_signal(signal: str) -> None:
         raise ValueError(f"signal = {signal!r} is unknown; allowed: {', '.join(SIGNALS)}")
 
 _DIGITS = ("Index", "Middle", "Ring", "Little", "Thumb")
-_GRIPPING = ("grip", "shake")
+_GRIPPING = HOLDING
 #: Phases in which the controllers open the digits. The thumb keeps its rotation: turning it back
 #: while the partner's hand still lies under it swept it through that hand (14-18 N on Thumb1-2
 #: and 1.4 N bone on bone in the release of the default handshake).
-_RELEASE = ("release", "return", "done")
+_RELEASE = RELEASING
 
 
 class _Worlds:

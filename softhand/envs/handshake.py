@@ -18,7 +18,7 @@ from softhand.envs.touch import (
     MAX_ACTION_PERIOD_S,
     TwoHandTouchEnv,
 )
-from softhand.hands.config import TIMESTEP_RANGE_S
+from softhand.hands.config import TIMESTEP_RANGE_S, ArmConfig
 from softhand.sensors.device import SensorSpec
 
 __all__ = ["ACTION_PERIOD_S", "DEFAULT_REWARD_WEIGHTS", "DEFAULT_TIMESTEP_S", "HANDS",
@@ -97,12 +97,13 @@ class HandshakeEnv(TwoHandTouchEnv):
     * ``overload`` = -w_overload sum_i max(0, F_i - overload_N)^2 at all times;
     * ``effort`` = -w_effort |a|^2.
 
-    Episode end: truncated when the handshake is over (3.63 s by default); terminated on the step
-    whose physics diverged: MuJoCo reset its simulation after a bad position, velocity or
-    acceleration (its time went back), raised another warning (full contact or constraint buffer,
-    bad control), or the state is not finite. ``info["unstable"]`` then names the cause, the time
-    of the last good state and the dof (e.g. ``MuJoCo reset the simulation after a bad
-    acceleration (mjWARN_BADQACC) in dof 133 (joint pro_skin_Little1_pad) at t = 1.328 s``; False
+    Episode end: truncated when the handshake is over (4.15 s by default,
+    softhand.envs.partner.Timeline); terminated on the step whose physics diverged: MuJoCo reset
+    its simulation after a bad position, velocity or acceleration (its time went back), raised
+    another warning (full contact or constraint buffer, bad control), or the state is not
+    finite. ``info["unstable"]`` then names the cause, the time of the last good state and the
+    dof (e.g. ``MuJoCo reset the simulation after a bad acceleration (mjWARN_BADQACC) in dof 133
+    (joint pro_skin_Little1_pad) at t = 1.328 s``; False
     on every other step), ``info["time_s"]`` is that time, the observation is zeros, the reward
     -100 and the forces those of the last good step. ``run_handshake`` raises
     ``DivergenceError`` (softhand.envs.physics) with it; ``softhand handshake`` exits 3.
@@ -119,7 +120,7 @@ class HandshakeEnv(TwoHandTouchEnv):
     law's calibration),
     ``sensor_readings_N`` (dict region -> N on the sensor patch), ``sensor_load_estimate_N``
     (dict region -> N: the load a calibrated read-out infers from the reading by inverting the
-    transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, release,
+    transfer law's static curve; 0 inside a dead band), ``phase`` (reach, grip, shake, hold, release,
     return, done), ``reward_terms`` (dict), ``time_s``, ``partner_grip_N`` (the target of the
     partner's summed digit force: its sampled grip per phalanx times ``GRIP_PHALANGES``),
     ``partner_grip_measured_N`` (that sum, measured), ``partner_effort_rad`` (its grip
@@ -196,6 +197,11 @@ class HandshakeEnv(TwoHandTouchEnv):
             readings, then the true loads); see the observation space.
         sensor_dir: folder of ``transfer.json``, a non-empty path (default: the shipped
             ``calibration/sensors``).
+        sensored_arm, partner_arm: the arms the two hands ride (`softhand.hands.ArmConfig`:
+            endpoint stiffness, damping, rotational stiffness, moving mass and palm press, each
+            checked against softhand.hands.config.ARM_RANGES); None: the prosthesis user's arm
+            (``hand="prosthetic"``) or the experimenter's relaxed arm (``hand="human"``), and the
+            partner's active arm (softhand.hands.constants.ARMS).
         hand: ``prosthetic`` (default) or ``human``: the paper's protocol, the sensored hand as
             the experimenter's relaxed human hand (HANDS): human tissue on every region against
             the partner's (both the human law), soft joint impedance
@@ -256,7 +262,8 @@ class HandshakeEnv(TwoHandTouchEnv):
                  partner_size: tuple[float, float] | None = None,
                  hand: str = "prosthetic", contact_laws: str = "geometry",
                  render_mode: str | None = None, render_size: tuple[int, int] = (640, 480),
-                 render_view: CameraView | None = None) -> None:
+                 render_view: CameraView | None = None, sensored_arm: ArmConfig | None = None,
+                 partner_arm: ArmConfig | None = None) -> None:
         scenario = HandshakeScenario(squeeze=squeeze, overload_N=overload_N,
                                      reward_weights=reward_weights, randomize=randomize)
         super().__init__(scenario=scenario, design=design, skins=skins,
@@ -265,4 +272,5 @@ class HandshakeEnv(TwoHandTouchEnv):
                          sensor_placement=sensor_placement, observe=observe,
                          sensor_dir=sensor_dir, partner_size=partner_size, hand=hand,
                          contact_laws=contact_laws, render_mode=render_mode,
-                         render_size=render_size, render_view=render_view)
+                         render_size=render_size, render_view=render_view,
+                         sensored_arm=sensored_arm, partner_arm=partner_arm)

@@ -1,15 +1,25 @@
-"""The partner's scripted handshake: reach, grip, shake, release and return.
+"""The partner's scripted handshake: reach, grip, shake, hold, release and return.
 
-Timeline (Cabibihan et al., "Handshake timing", Front. Robot. AI 2022: a handshake lasts
-3.63 +/- 0.45 s: reach 0.92 s, contact 1.96 s with a 1.31 s main shake, return 0.75 s):
+Timeline (Cabibihan et al., "Guidelines for robot-to-human handshake from the movement nuances
+in human-to-human handshake", Front. Robot. AI 9:758519, 2022: a handshake lasts 3.63 +/- 0.45 s:
+reach 0.92 s, contact 1.96 s, return 0.75 s; the contact divides into a preshake of 0.06 s, a main
+shake of 1.31 s, a postshake of 0.06 s and 0.52 s of no movement just before the hands are
+retracted):
 
 | phase | what the partner does |
 |---|---|
 | reach | mount moves from its start pose to the contact pose (minimum-jerk), 0.92 s |
 | grip | fingers and thumb close until the grip force reaches its target, 0.30 s |
 | shake | mount oscillates at 4 Hz (Melnyk et al., IEEE AIM 2014), 1.31 s |
-| release | fingers open, 0.35 s (the rest of the 1.96 s contact) |
+| hold | mount still, grip held: the published 0.52 s of no movement (relaxation shows here) |
+| release | fingers open, 0.35 s |
 | return | mount goes back to its start pose, 0.75 s |
+
+The closing and the opening are phases of their own here (0.30 + 0.35 s), where the published
+contact phase has 0.06 s of pre- and postshake and the closing overlaps the reach: the contact
+lasts 2.48 s against the published 1.96 s, the handshake 4.15 s (assumption: a hand cannot
+close over another in 0.06 s; the published 0.52 s hold is kept whole). Population durations
+scale this timeline by the published spread (softhand.envs.population).
 
 Grip: the partner reaches with an open hand, closes to its grasp posture (solved from the
 handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impedance towards the
@@ -40,10 +50,12 @@ __all__ = [
     "CLOSE_S",
     "GRIP_FORCE_N",
     "GRIP_PHALANGES",
+    "HOLDING",
     "MAX_EFFORT_RAD",
     "MAX_SQUEEZE",
     "PARTNER_SD_RANGE",
     "PHASES",
+    "RELEASING",
     "PartnerScript",
     "RelaxedHand",
     "Timeline",
@@ -55,7 +67,12 @@ __all__ = [
     "phase_index",
 ]
 
-PHASES = ("reach", "grip", "shake", "release", "return", "done")
+PHASES = ("reach", "grip", "shake", "hold", "release", "return", "done")
+#: Phases in which the hands hold each other: the partner grips, the reward's grip and contact
+#: terms count, the controllers close (everything of the handshake written once here)
+HOLDING = ("grip", "shake", "hold")
+#: Phases in which the hands let go
+RELEASING = ("release", "return", "done")
 GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N (per data-glove sensor)
 #: Phalanges the grip force is summed over (its target is GRIP_FORCE_N x this). assumption: the
 #: partner phalanges that touch the other hand in the grasp of two 190 x 88 mm hands (the paper's
@@ -67,16 +84,17 @@ SHAKE_AMPLITUDE_M = 0.005  # assumption, see the module docstring
 
 @dataclass(frozen=True)
 class Timeline:
-    """Phase durations (s) after Cabibihan et al. 2022."""
+    """Phase durations (s) after Cabibihan et al. 2022 (module docstring)."""
 
     reach_s: float = 0.92
     grip_s: float = 0.30
     shake_s: float = 1.31
+    hold_s: float = 0.52
     release_s: float = 0.35
     return_s: float = 0.75
 
     def __post_init__(self) -> None:
-        for name in ("reach_s", "grip_s", "shake_s", "release_s", "return_s"):
+        for name in ("reach_s", "grip_s", "shake_s", "hold_s", "release_s", "return_s"):
             v = getattr(self, name)
             if not (np.isfinite(v) and 0 < v <= 10):
                 raise ValueError(f"{name} = {v!r} s must be in (0, 10]")
@@ -85,7 +103,7 @@ class Timeline:
     def ends(self) -> tuple[float, ...]:
         """End time (s) of each phase but ``done``; computed once (the env asks every step)."""
         return tuple(float(x) for x in np.cumsum([self.reach_s, self.grip_s, self.shake_s,
-                                                  self.release_s, self.return_s]))
+                                                  self.hold_s, self.release_s, self.return_s]))
 
     @property
     def total_s(self) -> float:
@@ -96,7 +114,7 @@ class Timeline:
 
     def scaled(self, factor: float) -> Timeline:
         return Timeline(*(factor * v for v in (self.reach_s, self.grip_s, self.shake_s,
-                                                self.release_s, self.return_s)))
+                                                self.hold_s, self.release_s, self.return_s)))
 
 
 @njit(cache=True, inline="always")
@@ -128,7 +146,7 @@ def phase_at(ends: np.ndarray, t: float) -> int:
 
 
 def phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Index in PHASES of each world's phase at its time: ``ends`` (W, 5) the end of each phase
+    """Index in PHASES of each world's phase at its time: ``ends`` (W, 6) the end of each phase
     but ``done`` (Timeline.ends per world), ``t`` (W,) (s)."""
     return _phase_index(ends, np.asarray(t, float).reshape(-1))
 
@@ -181,7 +199,7 @@ class PartnerScript:
             raise ValueError(f"grip_force_N = {grip_force_N!r} must be finite and > 0")
         #: each world's timeline
         self.timelines = [timeline]
-        self.ends = np.array([timeline.ends])  # (W, 5) end of each phase but done (s)
+        self.ends = np.array([timeline.ends])  # (W, 6) end of each phase but done (s)
         self.reach_s = np.array([timeline.reach_s])
         self.return_s = np.array([timeline.return_s])
         self.starts = np.asarray(start_pos, float)[None].copy()  # (W, 3)
@@ -262,9 +280,9 @@ class PartnerScript:
         shaking = (e[:, 1] <= t) & (t < e[:, 2])
         held[:, 2] += np.where(shaking, ramp * SHAKE_AMPLITUDE_M * np.sin(
             2 * np.pi * SHAKE_HZ * (t - e[:, 1]) + self.shake_phases[r]), 0.0)
-        back = contacts + (_min_jerk((t - e[:, 3]) / self.return_s[r])[:, None]
+        back = contacts + (_min_jerk((t - e[:, 4]) / self.return_s[r])[:, None]
                            * (starts - contacts))
-        return np.where((t < e[:, 0])[:, None], reach, np.where((t < e[:, 3])[:, None], held, back))
+        return np.where((t < e[:, 0])[:, None], reach, np.where((t < e[:, 4])[:, None], held, back))
 
     def mount_path(self, times: np.ndarray, world: int = 0) -> np.ndarray:
         """World ``world``'s mount positions (m) at ``times`` (s), shape (len(times), 3)."""
@@ -290,7 +308,7 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
     out = open_q.copy()  # the reach
     for w in range(t.size):
         phase = phase_at(ends[w], t[w])
-        if phase == 1 or phase == 2:
+        if phase == 1 or phase == 2 or phase == 3:  # HOLDING
             s = _min_jerk((t[w] - ends[w, 0]) / CLOSE_S)
             target = grip_N[w]
             error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
@@ -305,9 +323,9 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
                 q = q if q != q else min(q, q_max[w, j])  # np.minimum: NaN kept
                 release_from[w, j] = out[w, j] = q
             released[w] = True
-        elif phase >= 3:  # the effort goes and the hand opens in 0.2 s
+        elif phase >= 4:  # RELEASING: the effort goes and the hand opens in 0.2 s
             efforts[w] = integral[w] = 0.0
-            s = _min_jerk((t[w] - ends[w, 2]) / 0.2)
+            s = _min_jerk((t[w] - ends[w, 3]) / 0.2)
             for j in range(out.shape[1]):
                 held = release_from[w, j] if released[w] else grasp_q[w, j]
                 out[w, j] = held + s * (open_q[w, j] - held)
@@ -439,7 +457,7 @@ class RelaxedHand:
     """
 
     def __init__(self, timeline: Timeline, grasp_q: np.ndarray, rotation: int) -> None:
-        self.ends = np.array([timeline.ends])  # (W, 5)
+        self.ends = np.array([timeline.ends])  # (W, 6)
         self.grasp = np.asarray(grasp_q, float)[None].copy()  # (W, drives)
         self.open = np.zeros_like(self.grasp)
         self.open[:, rotation] = self.grasp[:, rotation]
@@ -465,6 +483,6 @@ class RelaxedHand:
         phase = phase_index(self.ends, t)[:, None]
         closing = self.open + _min_jerk((t - self.ends[:, 0]) / CLOSE_S)[:, None] * (
             self.grasp - self.open)
-        opening = self.grasp + _min_jerk((t - self.ends[:, 2]) / 0.2)[:, None] * (
+        opening = self.grasp + _min_jerk((t - self.ends[:, 3]) / 0.2)[:, None] * (
             self.open - self.grasp)
-        return np.where(phase == 0, self.open, np.where(phase <= 2, closing, opening))
+        return np.where(phase == 0, self.open, np.where(phase <= 3, closing, opening))

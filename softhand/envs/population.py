@@ -10,8 +10,10 @@ distributions; each quantity, its distribution (normal ones truncated at +-2.5 S
   an assumption: Table 1 gives no correlation)
 - grip per phalanx: normal, 2.5 +- 0.5 N; mean: Melnyk et al., IEEE AIM 2014 (data gloves); SD:
   an assumption (20 %)
-- duration: normal, 3.63 +- 0.45 s (the phases scale together); Cabibihan et al., Front. Robot. AI
-  2022
+- duration: normal, 3.63 +- 0.45 s, Cabibihan et al., Front. Robot. AI 2022, as a factor on the
+  timeline's phases (softhand.envs.partner.Timeline: 4.15 s, its closing and opening phases
+  added to the published 3.63 s): the partner's duration is 4.15 s x (drawn / 3.63), and the
+  phases scale together
 - shake phase: uniform in [0, 2 pi)
 
 `sample_partners` draws them from one seed (reproducible); `run_partner` runs one
@@ -30,7 +32,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from softhand.envs.partner import GRIP_FORCE_N, PARTNER_SD_RANGE
+from softhand.envs.partner import GRIP_FORCE_N, PARTNER_SD_RANGE, Timeline
 from softhand.paper import paper
 
 __all__ = [
@@ -102,7 +104,7 @@ def sample_partners(n: int, seed: int = 0) -> list[Partner]:
             hand_length_mm=_truncated_normal(rng, lm, ls),
             hand_width_mm=_truncated_normal(rng, wm, ws),
             grip_N=_truncated_normal(rng, GRIP_FORCE_N, GRIP_SD_N),
-            duration_s=_truncated_normal(rng, *DURATION_S),
+            duration_s=_truncated_normal(rng, *DURATION_S) * Timeline().total_s / DURATION_S[0],
             shake_phase_rad=float(rng.uniform(0.0, 2 * np.pi))))
     return out
 

@@ -13,6 +13,7 @@ import numpy as np
 from softhand import __version__
 from softhand.envs.controllers import make_controller
 from softhand.envs.handshake import HandshakeEnv
+from softhand.envs.partner import HOLDING
 from softhand.envs.physics import DivergenceError, mujoco_warnings_kept
 from softhand.envs.skins import skin_of_pair
 from softhand.hands.config import HandConfig
@@ -104,7 +105,7 @@ class HandshakeRun:
             g = grasp_metrics(m, d, *layouts)
             for hand, v in g["self_penetration_mm"].items():
                 worst[hand] = max(worst[hand], v)
-            if self.phase[k] in ("grip", "shake"):
+            if self.phase[k] in HOLDING:
                 margin = min(margin, g["partner_limit_margin_deg"])
             if k == mid:
                 at_mid = g
@@ -121,7 +122,7 @@ class HandshakeRun:
         (grip and shake, after its first 0.25 s): mean measured and target (N), and the 95th
         percentile of the relative error (%)."""
         g = self.partner_grip_N
-        holding = np.array([p in ("grip", "shake") for p in self.phase])
+        holding = np.array([p in HOLDING for p in self.phase])
         if g is None or not holding.any():
             return {"measured_N": 0.0, "target_N": 0.0, "p95_error_pct": float("nan")}
         start = self.time_s[holding][0] + 0.25
@@ -185,7 +186,7 @@ class HandshakeRun:
         of the thumb rotation (deg) while gripping, the regions that touched (> 0.05 N), and the
         partner's largest excursion past a joint's human range (deg; MuJoCo's limits are soft)."""
         m = self.model
-        grip = np.array([p in ("grip", "shake") for p in self.phase])
+        grip = np.array([p in HOLDING for p in self.phase])
         q = self.qpos[grip] if grip.any() else self.qpos
         out: dict = {"prosthetic_flexion_deg": {}, "touched": [
             r for r, v in self.table().items() if v["peak_N"] > 0.05]}
@@ -228,7 +229,7 @@ class HandshakeRun:
             return {}
         from softhand.skin.files import load_calibration
 
-        hold = np.array([p in ("grip", "shake") for p in self.phase])
+        hold = np.array([p in HOLDING for p in self.phase])
         out = {}
         for i, region in enumerate(self.region_names):
             x = self.pad_compression_mm[:, i]

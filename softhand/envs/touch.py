@@ -45,7 +45,13 @@ from softhand.envs.skins import (
 )
 from softhand.envs.spaces import OBSERVE, action_names, observation_names, region_values
 from softhand.hands import SceneConfig, partner_actuators, prosthetic_actuators, regions
-from softhand.hands.config import TIMESTEP_RANGE_S, HandConfig, PartnerConfig, ProstheticConfig
+from softhand.hands.config import (
+    TIMESTEP_RANGE_S,
+    ArmConfig,
+    HandConfig,
+    PartnerConfig,
+    ProstheticConfig,
+)
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import HUMAN
@@ -109,7 +115,8 @@ class TwoHandTouchEnv(gym.Env):
                  partner_size: tuple[float, float] | None = None,
                  hand: str = "prosthetic", contact_laws: str = "geometry",
                  render_mode: str | None = None, render_size: tuple[int, int] = (640, 480),
-                 render_view: CameraView | None = None) -> None:
+                 render_view: CameraView | None = None, sensored_arm: ArmConfig | None = None,
+                 partner_arm: ArmConfig | None = None) -> None:
         # every argument (and every calibration file used) is checked before any work is done
         if not isinstance(scenario, Scenario):
             raise ValueError(f"scenario = {show(scenario)}: expected a softhand.envs.scenario."
@@ -136,7 +143,14 @@ class TwoHandTouchEnv(gym.Env):
             raise ValueError(f"hand = {show(hand)}: allowed {', '.join(HANDS)}")
         self.hand = hand
         prosthetic = ProstheticConfig(actuation="relaxed-human" if hand == "human" else "motors")
-        self.config = SceneConfig(timestep_s=timestep_s, partner=partner, prosthetic=prosthetic)
+        arms = {"sensored_arm": sensored_arm, "partner_arm": partner_arm}
+        for key, arm in arms.items():
+            if arm is not None and not isinstance(arm, ArmConfig):
+                raise ValueError(f"{key} = {show(arm)}: expected None or a softhand.hands."
+                                 "ArmConfig (ArmConfig.of('relaxed' | 'prosthesis-user' | "
+                                 "'active', ...))")
+        self.config = SceneConfig(timestep_s=timestep_s, partner=partner, prosthetic=prosthetic,
+                                  **{k: v for k, v in arms.items() if v is not None})
         timestep_s = self.config.timestep_s
         max_skip = int(MAX_ACTION_PERIOD_S / timestep_s + 1e-9)
         if frame_skip is None:
@@ -196,7 +210,9 @@ class TwoHandTouchEnv(gym.Env):
                               "bone_sensors": [infos[r].bone_sensors for r in self.region_names]}
         self.physics = MujocoPhysics(m, self.frame_skip, **self.physics_reads)
         self.model, self.data = m, self.physics.data
-        self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")])
+        # the sensored hand's joints (its arm's free joint is the arm's state, not the hand's)
+        self._pro_joints = np.array([j for j in range(m.njnt) if m.joint(j).name.startswith("pro_")
+                                     and m.jnt_type[j] != mujoco.mjtJoint.mjJNT_FREE])
         self._pro_qpos = m.jnt_qposadr[self._pro_joints]
         self._pro_dof = m.jnt_dofadr[self._pro_joints]
         #: qpos address of the sensored thumb's rotation (a scenario may pre-shape it)

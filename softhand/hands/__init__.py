@@ -10,7 +10,13 @@
 - mjcf: the generated files in models/mjcf.
 """
 
-from softhand.hands.config import HandConfig, PartnerConfig, ProstheticConfig, SceneConfig
+from softhand.hands.config import (
+    ArmConfig,
+    HandConfig,
+    PartnerConfig,
+    ProstheticConfig,
+    SceneConfig,
+)
 from softhand.hands.grasp import Grasp, partner_contact_pose, partner_start_pose, solve_grasp
 from softhand.hands.layout import HandLayout, hand_layout
 from softhand.hands.mjcf import write_mjcf
@@ -30,6 +36,7 @@ from softhand.hands.prosthetic import (
 from softhand.hands.scene import scene_spec
 
 __all__ = [
+    "ArmConfig",
     "Grasp",
     "HandConfig",
     "HandLayout",

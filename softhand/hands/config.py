@@ -15,8 +15,8 @@ from softhand.hands import constants as const
 from softhand.paper import paper
 from softhand.validate import check_number
 
-__all__ = ["ACTUATIONS", "TIMESTEP_RANGE_S", "HandConfig", "PartnerConfig", "ProstheticConfig",
-           "SceneConfig"]
+__all__ = ["ACTUATIONS", "ARM_RANGES", "TIMESTEP_RANGE_S", "ArmConfig", "HandConfig",
+           "PartnerConfig", "ProstheticConfig", "SceneConfig"]
 
 #: Allowed simulation timestep of the handshake scene, closed interval (s). The skins were
 #: calibrated and are tested at 0.5-2 ms (``softhand.skin.rig.CHECKED_TIMESTEPS_S``; the env tests
@@ -41,6 +41,57 @@ def _check(name: str, value: float, lo: float, hi: float, unit: str) -> None:
         raise ValueError(f"{name} = {value!r}: expected a number in {unit}")
     if not (math.isfinite(value) and lo < value < hi):
         raise ValueError(f"{name} = {value!r} {unit}: allowed range ({lo}, {hi}) {unit}")
+
+
+#: Allowed range of each ArmConfig field, closed intervals (units in the field names). The
+#: stiffness covers relaxed to strongly co-contracted arms (tens of N/m to a few kN/m at the hand,
+#: [Tsuji95], [Perreault04] in softhand.hands.constants); the press stays under the skins'
+#: calibrated 20 N.
+ARM_RANGES = {
+    "stiffness_n_per_m": (20.0, 5000.0),
+    "damping_ns_per_m": (0.5, 200.0),
+    "rot_stiffness_nm_per_rad": (0.1, 50.0),
+    "mass_kg": (0.05, 5.0),
+    "press_n": (0.0, 10.0),
+}
+
+
+@dataclass(frozen=True)
+class ArmConfig:
+    """The arm a hand rides: its endpoint impedance at the wrist and its push on the palm.
+
+    The hand's wrist body is free and held to its arm's anchor (a fixed point for the sensored
+    hand, the scripted mount for the partner) by a spring-damper of these constants, as a
+    person's arm holds the hand (softhand.hands.scene). Each field is checked against
+    `ARM_RANGES`.
+
+    Attributes:
+        stiffness_n_per_m: translational endpoint stiffness at the wrist, isotropic (N/m).
+        damping_ns_per_m: translational endpoint damping (N s/m).
+        rot_stiffness_nm_per_rad: rotational stiffness of the hand about the wrist (N m/rad).
+        mass_kg: the arm's mass moving with the wrist, besides the hand's own (kg).
+        press_n: the arm's push of its palm towards the other hand's, along its palm normal (N):
+            the anchor lies press / stiffness beyond the hand's place in the grasp.
+    """
+
+    stiffness_n_per_m: float
+    damping_ns_per_m: float
+    rot_stiffness_nm_per_rad: float
+    mass_kg: float
+    press_n: float = const.PALM_PRESS_N
+
+    def __post_init__(self) -> None:
+        for key, (lo, hi) in ARM_RANGES.items():
+            check_number(f"arm {key}", getattr(self, key), lo=lo, hi=hi,
+                         why="(softhand.hands.config.ARM_RANGES)")
+
+    @classmethod
+    def of(cls, kind: str, **changes: float) -> ArmConfig:
+        """The arm ``kind`` of softhand.hands.constants.ARMS (``relaxed``, ``prosthesis-user``,
+        ``active``), with ``changes`` over its fields."""
+        if kind not in const.ARMS:
+            raise ValueError(f"arm {kind!r} is unknown; allowed: {', '.join(const.ARMS)}")
+        return cls(**{**dict(const.ARMS[kind]), **changes})
 
 
 @dataclass(frozen=True)
@@ -168,7 +219,7 @@ class PartnerConfig:
 
 @dataclass(frozen=True)
 class SceneConfig:
-    """The handshake scene: options, the fixed prosthetic hand and the mocap-driven partner.
+    """The handshake scene: options, the two hands and the arms they ride.
 
     World frame: +X is the prosthetic hand's pointing direction, +Z up, gravity along -Z.
     The prosthetic hand is in a handshake pose: thumb up, palm facing +Y. The partner hand faces it:
@@ -183,7 +234,14 @@ class SceneConfig:
             than 1 ms (both measured by ``softhand bench handshake``,
             ``reports/bench-handshake.md``).
         gravity_m_s2: magnitude of gravity, along -Z (m/s^2).
-        prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m).
+        sensored_arm: the arm the sensored hand rides; None (default): the prosthesis user's
+            (``ArmConfig.of("prosthesis-user")``) for the prosthetic's motors, the experimenter's
+            relaxed arm (``"relaxed"``) for ``actuation="relaxed-human"`` (the paper's protocol).
+            `arm` gives the one in use.
+        partner_arm: the partner's arm (default ``ArmConfig.of("active")``): its mount follows
+            the script, the hand follows the mount through this impedance.
+        prosthetic_wrist_pos_m: world position of the prosthetic hand's wrist-crease origin (m),
+            the sensored arm's rest place in the grasp.
         crossing_angle_deg: starting angle of the grasp solve (softhand.hands.grasp) between the
             two hands' long axes in the plane of the touching palms, from antiparallel (0) to
             crossed at right angles (90), in degrees, shared equally
@@ -202,6 +260,8 @@ class SceneConfig:
 
     prosthetic: ProstheticConfig = field(default_factory=ProstheticConfig)
     partner: PartnerConfig = field(default_factory=PartnerConfig)
+    sensored_arm: ArmConfig | None = None
+    partner_arm: ArmConfig = field(default_factory=lambda: ArmConfig.of("active"))
     timestep_s: float = 0.002
     gravity_m_s2: float = 9.81
     prosthetic_wrist_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -213,9 +273,21 @@ class SceneConfig:
                      why="s (skins calibrated at 0.0005-0.002 s)")
         _check("gravity_m_s2", self.gravity_m_s2, -1e-12, 100.0, "m/s^2")
         _check("crossing_angle_deg", self.crossing_angle_deg, -1e-12, 90.0 + 1e-12, "deg")
+        for name in ("sensored_arm", "partner_arm"):
+            value = getattr(self, name)
+            if not (isinstance(value, ArmConfig) or (value is None and name == "sensored_arm")):
+                raise ValueError(f"{name} = {value!r}: expected an ArmConfig")
         for name in ("prosthetic_wrist_pos_m", "partner_start_offset_m"):
             value = getattr(self, name)
             if len(value) != 3:
                 raise ValueError(f"{name} = {value!r}: expected 3 coordinates in m")
             for i, v in enumerate(value):
                 _check(f"{name}[{i}]", v, -10.0, 10.0, "m")
+
+    @property
+    def arm(self) -> ArmConfig:
+        """The sensored hand's arm in use (`sensored_arm`, or its default for the actuation)."""
+        if self.sensored_arm is not None:
+            return self.sensored_arm
+        relaxed = self.prosthetic.actuation == "relaxed-human"
+        return ArmConfig.of("relaxed" if relaxed else "prosthesis-user")

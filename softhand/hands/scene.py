@@ -1,14 +1,25 @@
-"""The handshake scene: both hands in one spec, with softhand's simulation options.
+"""The handshake scene: both hands in one spec, each on its arm, with softhand's simulation options.
 
-World frame: +Z up, gravity along -Z, no floor. The prosthetic hand (prefix ``pro_``) is fixed to
-the world through the body ``pro_wrist`` in a handshake pose: fingers forward (+X), thumb up, palm
-facing +Y. The partner hand (prefix ``hum_``) rides the free body ``hum_arm``, held by a soft weld
-(the arm's compliance) to the mocap target ``hum_base``, and faces it: palm facing -Y, fingers
-towards -X. The two long axes cross at SceneConfig.crossing_angle_deg in the plane of the touching
-palms, shared equally: each hand's fingers point down by half of it (prosthetic_quat(),
-partner_quat()), so each forearm rises gently towards its elbow and each hand's fingers lie across
-the other's palm. The env drives ``hum_base``: from its start
-pose (where the scene places it) to partner_contact_pose() (reach), shakes it, and takes it back.
+World frame: +Z up, gravity along -Z, no floor. The prosthetic hand (prefix ``pro_``) rides the
+free body ``pro_wrist``, held to the fixed anchor ``pro_anchor`` by its arm (SceneConfig.arm: the
+prosthesis user's residual limb and socket, or the paper's experimenter's relaxed arm), in a
+handshake pose: fingers forward (+X), thumb up, palm facing +Y. The partner hand (prefix
+``hum_``) rides the free body ``hum_arm``, held by its arm (SceneConfig.partner_arm) to the mocap
+target ``hum_base``, and faces it: palm facing -Y, fingers towards -X. The two long axes cross at
+SceneConfig.crossing_angle_deg in the plane of the touching palms, shared equally: each hand's
+fingers point down by half of it (prosthetic_quat(), partner_quat()), so each forearm rises gently
+towards its elbow and each hand's fingers lie across the other's palm. The env drives
+``hum_base``: from its start pose (where the scene places it) to partner_contact_pose() (reach),
+shakes it, and takes it back; the shake reaches the sensored hand only through the contacts.
+
+Arms (`add_arm`): a weld between the wrist body and its anchor whose stiffness and damping are
+those of the arm's endpoint (softhand.hands.config.ArmConfig), set in MuJoCo's direct format
+scaled by the body's inverse weight, so that a force F moves the wrist F / stiffness and a
+torque T turns it T / rot_stiffness (tests/test_hands.py pushes both); a sphere of the arm's
+moving mass rides the wrist. The arms carry their hands' weight (gravity compensation on every
+body of both hands). Each anchor lies ArmConfig.press_n / stiffness beyond its hand's place in the
+grasp along its palm normal (the sensored one here, the partner's through its mount,
+`press_offset`), so each arm presses its palm towards the other's.
 
 Contact pose: where the handshake's grasp, solved from its contacts, puts the partner
 (softhand.hands.grasp: palms pressed, web spaces together, each thumb over the back of the other
@@ -17,27 +28,28 @@ hand's index metacarpal, the fingers wrapped round the other's ulnar border).
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
-from softhand.hands.config import SceneConfig
+from softhand.hands.config import ArmConfig, SceneConfig
 from softhand.hands.layout import HandLayout
 from softhand.hands.partner import add_partner_hand
 from softhand.hands.prosthetic import add_prosthetic_hand
 from softhand.hands.skeleton import new_spec, quat_from_axes
 
-#: Time constant of the weld holding the partner's hand to its target (s): with the hand's
-#: ~0.4 kg it gives an endpoint stiffness of a few hundred N/m, the order of the human arm's
-#: postural hand stiffness (Mussa-Ivaldi, Hogan & Bizzi 1985, J Neurosci 5(10):2732-2743).
-ARM_TIMECONST_S = 0.035
-#: Mass moving with the partner's wrist (kg): the distal forearm (assumption, ~1/4 of a 1.2 kg
-#: forearm, Winter 2009 Table 4.1: forearm 0.016 x body mass).
-ARM_MASS_KG = 0.3
+#: The impedance d of an arm's weld rows, fixed (solimp d0 = dmax): the rows' force is then
+#: linear in the offset (`add_arm`).
+_ARM_IMPEDANCE = 0.5
+#: palm normals in the world: the prosthetic's palm faces +Y, the partner's -Y
+PALM_NORMALS = {"pro_": np.array([0.0, 1.0, 0.0]), "hum_": np.array([0.0, -1.0, 0.0])}
 
 __all__ = [
-    "ARM_MASS_KG",
-    "ARM_TIMECONST_S",
+    "PALM_NORMALS",
+    "add_arm",
     "partner_quat",
+    "press_offset",
     "prosthetic_quat",
     "scene_spec",
     "web_point",
@@ -77,6 +89,38 @@ def web_point(layout: HandLayout) -> np.ndarray:
                      index.base_m[1] + index.radii_m["metacarpal"], 0.0])
 
 
+def press_offset(arm: ArmConfig, prefix: str) -> np.ndarray:
+    """Where an arm's anchor lies from its hand's place in the grasp (m, world): press_n /
+    stiffness along the hand's palm normal (`PALM_NORMALS`), so that the arm's spring pushes the
+    palm towards the other hand's with press_n once the palms meet."""
+    return PALM_NORMALS[prefix] * (arm.press_n / arm.stiffness_n_per_m)
+
+
+def add_arm(spec: mujoco.MjSpec, wrist: str, anchor: str, arm: ArmConfig,
+            invweight: tuple[float, float]) -> mujoco.MjsEquality:
+    """Hold the free body ``wrist`` to ``anchor`` by the arm's endpoint impedance (module
+    docstring): a weld in MuJoCo's direct format with a fixed impedance d = 0.5, whose rows then
+    give a force 2 k r / A_t and a torque k s^2 theta / (2 A_r) (measured on this scene's wrists:
+    tests/test_hands.py), for the direct stiffness k, the torque scale s and the wrist's
+    translational and rotational inverse weights ``invweight`` = (A_t, A_r)
+    (MjModel.body_invweight0 of ``wrist``). So k = stiffness A_t / 2, b = damping A_t / 2 and
+    s = sqrt(2 rot_stiffness A_r / k)."""
+    a_t, a_r = (float(v) for v in invweight)
+    k = 0.5 * arm.stiffness_n_per_m * a_t
+    b = 0.5 * arm.damping_ns_per_m * a_t
+    scale = math.sqrt(2.0 * arm.rot_stiffness_nm_per_rad * a_r / k)
+    weld = spec.add_equality(name=f"{wrist}_weld", type=mujoco.mjtEq.mjEQ_WELD,
+                             objtype=mujoco.mjtObj.mjOBJ_BODY, name1=wrist, name2=anchor)
+    weld.solref = [-k, -b]
+    weld.solimp = [_ARM_IMPEDANCE, _ARM_IMPEDANCE, 0.001, 0.5, 2.0]
+    # anchor at the wrist body's origin, relative pose the identity: the spring pulls the wrist
+    # onto its anchor (the shared numeric default of equalities puts a weld's anchor 1 m along
+    # body2's y, and an unset relative pose would take the press offset as the rest pose)
+    weld.data[0:10] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    weld.data[10] = scale
+    return weld
+
+
 def _rotation(quat: np.ndarray) -> np.ndarray:
     mat = np.zeros(9)
     mujoco.mju_quat2Mat(mat, np.asarray(quat, float))
@@ -106,11 +150,14 @@ def scene_spec(config: SceneConfig | None = None, *,
     # solving them apart saved: 4-5 % of a handshake step, region forces equal to 1e-4 N.
     spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_ISLAND)
     spec.worldbody.add_light(name="key_light", pos=[0.1, -0.5, 1.8], dir=[0.0, 0.5, -1.0])
-    wrist = spec.worldbody.add_body(
-        name="pro_wrist",
-        pos=[float(v) for v in config.prosthetic_wrist_pos_m],
-        quat=prosthetic_quat(config.crossing_angle_deg).tolist(),
-    )
+    quat_pro = prosthetic_quat(config.crossing_angle_deg)
+    rest = np.asarray(config.prosthetic_wrist_pos_m, float)
+    anchor = rest + press_offset(config.arm, "pro_")
+    spec.worldbody.add_body(name="pro_anchor", pos=anchor.tolist(), quat=quat_pro.tolist())
+    wrist = spec.worldbody.add_body(name="pro_wrist", pos=rest.tolist(), quat=quat_pro.tolist())
+    wrist.add_freejoint(name="pro_arm")
+    wrist.add_geom(name="pro_arm_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.02, 0, 0],
+                   mass=config.arm.mass_kg, contype=0, conaffinity=0, group=4)
     add_prosthetic_hand(spec, wrist, config.prosthetic, "pro_")
     if partner_pose is None:
         from softhand.hands.grasp import partner_start_pose  # the grasp is solved on this scene
@@ -118,20 +165,21 @@ def scene_spec(config: SceneConfig | None = None, *,
         partner_pose = partner_start_pose(config)
     pos, quat = (np.asarray(v, float) for v in partner_pose)
     spec.worldbody.add_body(name="hum_base", mocap=True, pos=pos.tolist(), quat=quat.tolist())
-    # The partner's arm: the hand rides a free body held to the mocap target by a soft weld, so
-    # the scripted reach and shake are compliant (an arm, not an infinitely strong fixture).
+    # The partner's arm: the hand rides a free body held to the mocap target by the arm's
+    # impedance, so the scripted reach and shake are compliant (an arm, not a fixture).
     arm = spec.worldbody.add_body(name="hum_arm", pos=pos.tolist(), quat=quat.tolist())
     arm.add_freejoint(name="hum_arm")
     arm.add_geom(name="hum_arm_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.02, 0, 0],
-                 mass=ARM_MASS_KG, contype=0, conaffinity=0, group=4)
+                 mass=config.partner_arm.mass_kg, contype=0, conaffinity=0, group=4)
     add_partner_hand(spec, arm, config.partner, "hum_")
-    weld = spec.add_equality(name="hum_arm_weld", type=mujoco.mjtEq.mjEQ_WELD,
-                             objtype=mujoco.mjtObj.mjOBJ_BODY, name1="hum_arm", name2="hum_base")
-    weld.solref = [ARM_TIMECONST_S, 1.0]
-    # anchor at the arm body's origin: the shared numeric default of equalities puts a weld's
-    # anchor 1 m along body2's y, where a small wrist rotation satisfies it with the hand far away
-    weld.data[0:3] = 0.0
     for body in spec.bodies:
-        if body.name.startswith("hum_"):
-            body.gravcomp = 1.0  # the arm carries the hand's weight
+        if body.name.startswith(("hum_", "pro_")):
+            body.gravcomp = 1.0  # each arm carries its hand's weight
+    # the welds' gains need the wrists' inverse weights, which MuJoCo computes at compile time
+    # (3 ms for this scene): compiled once without them
+    model = spec.compile()
+    for wrist_body, anchor_body, arm_config in (("pro_wrist", "pro_anchor", config.arm),
+                                                ("hum_arm", "hum_base", config.partner_arm)):
+        add_arm(spec, wrist_body, anchor_body, arm_config,
+                tuple(model.body_invweight0[model.body(wrist_body).id]))
     return spec

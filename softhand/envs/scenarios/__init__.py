@@ -1,6 +1,6 @@
 """Social touches on the two-hand touch env, one module each (softhand.envs.scenario: the seam).
 
-- handshake: the paper's handshake (Cabibihan et al.): reach, grip, shake, release, return.
+- handshake: the paper's handshake (Cabibihan et al.): reach, grip, shake, hold, release, return.
 
 A new touch (a caress, a pat, a hand held still) is a new module here with a
 `Scenario` subclass: its phases, the partner's plan (mount path and

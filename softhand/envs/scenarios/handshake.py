@@ -4,7 +4,7 @@ in the grasp solved from the handshake's contacts (softhand.hands.grasp).
 
 Reward (weights are constructor arguments, defaults in ``DEFAULT_REWARD_WEIGHTS``):
 
-* ``grip`` = -w_grip ((F_mean - F_h) / F_h)^2 while the partner grips or shakes, with F_mean the
+* ``grip`` = -w_grip ((F_mean - F_h) / F_h)^2 while the hands hold each other (grip, shake, hold), with F_mean the
   mean force over touched regions (> 0.05 N) and F_h the partner's grip per phalanx (2.5 N,
   Melnyk et al. 2014, times ``squeeze``): a human-like, matched grip;
 * ``contact`` = +w_contact (touched regions / 18) in the same phases: a full-hand grip;
@@ -24,8 +24,10 @@ from softhand.compiled import pairwise_sum, row_sums
 from softhand.envs.partner import (
     GRIP_FORCE_N,
     GRIP_PHALANGES,
+    HOLDING,
     MAX_SQUEEZE,
     PHASES,
+    RELEASING,
     PartnerScript,
     RelaxedHand,
     Timeline,
@@ -36,6 +38,7 @@ from softhand.envs.partner import (
 from softhand.envs.scenario import Scenario
 from softhand.hands import partner_contact_pose, partner_start_pose, solve_grasp
 from softhand.hands.grasp import PROSTHETIC_MOTOR_JOINTS
+from softhand.hands.scene import press_offset
 from softhand.validate import check_number, show
 
 if TYPE_CHECKING:
@@ -63,8 +66,8 @@ class HandshakeScenario(Scenario):
 
     name: ClassVar[str] = "handshake"
     phases: ClassVar[tuple[str, ...]] = PHASES
-    engaged: ClassVar[tuple[str, ...]] = ("grip", "shake")
-    released: ClassVar[tuple[str, ...]] = ("release", "return", "done")
+    engaged: ClassVar[tuple[str, ...]] = HOLDING
+    released: ClassVar[tuple[str, ...]] = RELEASING
     reward_keys: ClassVar[tuple[str, ...]] = tuple(DEFAULT_REWARD_WEIGHTS)
 
     def __init__(self, *, squeeze: float = 1.0, overload_N: float = 10.0,
@@ -119,6 +122,8 @@ class HandshakeScenario(Scenario):
         phase = options.get("shake_phase_rad", phase)
         start, quat = partner_start_pose(self._config)
         contact, _ = partner_contact_pose(self._config)
+        # the partner's arm presses its palm onto the other's: its mount aims past the grasp
+        contact = contact + press_offset(self._config.partner_arm, "hum_")
         # the grip: GRIP_FORCE_N per phalanx (a data glove's mean per sensor, Melnyk et al. 2014)
         # on GRIP_PHALANGES phalanges, summed
         self.script = PartnerScript(self.timeline.scaled(factor), start, contact,
@@ -171,7 +176,7 @@ class HandshakeScenario(Scenario):
 def handshake_reward(forces_N, action, phase, grip_N, weights, overload_N):
     """The reward's terms (module docstring) of W worlds, compiled: ``forces_N`` (W, regions),
     ``action`` (W, 6), ``phase`` (W,) each world's index in PHASES (the grip and contact terms
-    count while the hands hold each other: grip and shake), ``grip_N`` (W,) the partner's summed
+    count while the hands hold each other: HOLDING), ``grip_N`` (W,) the partner's summed
     grip target (its grip per phalanx times GRIP_PHALANGES), ``weights`` (W, 4) in
     DEFAULT_REWARD_WEIGHTS order, ``overload_N`` (W,). Returns the terms (W, 4) in that order.
     Sums go in numpy's order (pairwise_sum), as the numpy code this replaced, bit for bit."""
@@ -188,7 +193,7 @@ def handshake_reward(forces_N, action, phase, grip_N, weights, overload_N):
             touched = f > CONTACT_N
             count += touched
             held[i] = f if touched else 0.0
-        if phase[w] == _GRIP or phase[w] == _SHAKE:
+        if phase[w] == _GRIP or phase[w] == _SHAKE or phase[w] == _HOLD:  # HOLDING
             target = grip_N[w] / GRIP_PHALANGES  # per phalanx
             x = (pairwise_sum(held) / max(count, 1) - target) / target
             out[w, 0] = -weights[w, 0] * (x * x)
@@ -198,7 +203,7 @@ def handshake_reward(forces_N, action, phase, grip_N, weights, overload_N):
     return out
 
 
-_GRIP, _SHAKE = PHASES.index("grip"), PHASES.index("shake")
+_GRIP, _SHAKE, _HOLD = (PHASES.index(p) for p in HOLDING)
 
 
 class HandshakeWorlds:
