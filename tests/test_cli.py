@@ -186,6 +186,11 @@ def test_handshake_json_and_recording(tmp_path):
     assert cfg["timestep_s"] == 0.002 and cfg["physics_steps_per_env_step"] == 5
     assert cfg["skins"] == {"Palm1": "rigid"} and cfg["controller"] == "neutral"
     assert data["env_steps_per_s"] == pytest.approx(data["steps_per_s"] / 5)
+    # where it overloaded: the deepest skin-tissue pair with its geoms and time, the bone peak
+    over = data["overload"]
+    assert 0.0 < over["deepest_pair_mm"] < 20.0 and "/" in over["deepest_pair"], over
+    assert over["bone_on_bone_peak_N"] == data["force_accounting"]["bone_on_bone_peak_N"] == 0.0
+    assert over["first_overload"] is None  # the default run stays under 10 N per region
 
 
 def test_handshake_text_starts_with_a_header_and_explains_fig4():

@@ -172,7 +172,9 @@ def test_partner_tissues_listed(scene):
     spec, model = scene
     names = partner_tissue_geoms(model, "hum_")
     assert names == partner_tissue_geoms(spec, "hum_")
-    assert len(names) == 1 + 3 + 12 and "hum_tissue_palm" in names  # one palm piece: no seam
+    # one palm piece (no seam), the thumb's 3, the fingers' 12, and the forearm's
+    assert len(names) == 1 + 3 + 12 + 1 and "hum_tissue_palm" in names
+    assert names[-1] == "hum_tissue_forearm"
     with pytest.raises(ValueError, match="hum_tissue_palm"):
         partner_tissue_geoms(build_prosthetic_hand().compile(), "hum_")
 
@@ -282,7 +284,8 @@ def test_each_hand_is_one_layer_of_soft_geoms(build, prefix, soft):
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     geoms = [g for g in range(model.ngeom) if model.geom(g).name.startswith(prefix + soft)]
-    assert len(geoms) == (19 if prefix == "pro_" else 16)  # the partner's palm is one piece
+    # the partner's palm is one piece; its forearm stub has a tissue too
+    assert len(geoms) == (19 if prefix == "pro_" else 17)
     ft = np.zeros(6)
     worst = min((mujoco.mj_geomDistance(model, data, a, b, 0.01, ft), model.geom(a).name,
                  model.geom(b).name) for a in geoms for b in geoms if a < b)

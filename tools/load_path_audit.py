@@ -16,7 +16,8 @@ over the phases where the hands hold each other (grip, shake and hold):
 
 Usage: ``python tools/load_path_audit.py [--seed 0] [--hand prosthetic|human]
 [--representation soft-contact+relaxation] [--json OUT]``; ``--table`` runs seeds 0-4 and the
-human hand and prints one row each.
+human hand and prints one row each; ``--report reports/load-path [--before CHECKOUT]`` writes
+the report (both checkouts' tables and mj_step costs, the hold, the overload cases).
 """
 
 from __future__ import annotations
@@ -121,6 +122,158 @@ def audit(seed: int = 0, hand: str = "prosthetic", timestep_s: float = 0.002,
     }
 
 
+def step_cost_us(seed: int = 0, at_s: float = 1.9, steps: int = 2000, repeats: int = 5) -> float:
+    """Median over ``repeats`` of the mean wall time (us) of one mj_step of the default scene
+    from its state at ``at_s`` (mid-shake), a copy of the data stepped ``steps`` times."""
+    import time
+
+    import gymnasium as gym
+
+    import softhand.envs  # noqa: F401
+    from softhand.envs.controllers import make_controller
+
+    env = gym.make("softhand/Handshake-v0").unwrapped
+    m, d = env.model, env.data
+    policy = make_controller("neutral")
+    obs, info = env.reset(seed=seed)
+    while d.time < at_s:
+        obs, *_, info = env.step(policy(obs, info))
+    times = []
+    for _ in range(repeats):
+        copy = mujoco.MjData(m)
+        mujoco.mj_copyData(copy, m, d)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            mujoco.mj_step(m, copy)
+        times.append((time.perf_counter() - t0) / steps * 1e6)
+    return float(np.median(times))
+
+
+def hold_cases() -> list[dict]:
+    """The hold of the default handshake (seed 0) on two skins, memoryless and on relaxation
+    pads (HandshakeRun.hold_relaxation)."""
+    from softhand.envs.run import run_handshake
+
+    out = []
+    for rep in ("soft-contact", "soft-contact+relaxation"):
+        for design in ("pocket2-sil", "pocket2-pu"):
+            run = run_handshake(design=design, representation=rep, seed=0)
+            out.append({"design": design, "representation": rep, **run.hold_relaxation()})
+    return out
+
+
+def overload_cases() -> list[dict]:
+    """Where the hard cases overload (HandshakeRun.overload): the motors slammed closed at
+    full speed while the hands hold each other, and the partner squeezing 5x."""
+    from softhand.envs import HandshakeEnv
+    from softhand.envs.run import run_handshake, run_policy
+
+    def slam(obs, info):
+        return np.ones(6) if info.get("phase") in HELD else np.zeros(6)
+
+    cases = [("motors slammed closed", run_policy(HandshakeEnv(), slam, seed=0)),
+             ("partner squeezes 5x", run_handshake(squeeze=5.0, seed=0))]
+    return [{"case": name, "max_region_N": float(run.region_force_N.max()), **run.overload()}
+            for name, run in cases]
+
+
+def write_report(out: str, before: str | None) -> None:
+    """``out``.md and ``out``.json: the table for this checkout and (``before``: the path of
+    another checkout, run through PYTHONPATH) for that one, the hold, the overload cases and
+    the cost of an mj_step of both."""
+    import os
+    import subprocess
+    import tempfile
+
+    from softhand.bench.common import machine_info, machine_line
+
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    checkouts = {"after": here, **({"before": before} if before else {})}
+
+    def cost(path: str) -> float:  # one process per measurement, so that neither warms the other
+        env = {**os.environ, "PYTHONPATH": path}
+        done = subprocess.run([sys.executable, __file__, "--step-cost"], env=env, check=True,
+                              capture_output=True, text=True)
+        return float(done.stdout)
+
+    # the checkouts' mj_step costs interleaved, 3 rounds, the least of each (the host drifts)
+    costs = {k: [] for k in checkouts}
+    for _ in range(3):
+        for key, path in checkouts.items():
+            costs[key].append(cost(path))
+    data = {"machine": machine_info(),
+            "after": {"rows": [audit(s) for s in range(5)] + [audit(0, "human")],
+                      "step_us": min(costs["after"]), "step_us_runs": costs["after"]}}
+    if before:
+        env = {**os.environ, "PYTHONPATH": before}
+        with tempfile.TemporaryDirectory() as tmp:
+            rows = os.path.join(tmp, "rows.json")
+            subprocess.run([sys.executable, __file__, "--table", "--json", rows], env=env,
+                           check=True, capture_output=True)
+            with open(rows) as fh:
+                data["before"] = {"rows": json.load(fh), "step_us": min(costs["before"]),
+                                  "step_us_runs": costs["before"], "checkout": before}
+    data["hold"] = hold_cases()
+    data["overload"] = overload_cases()
+    with open(out + ".json", "w") as fh:
+        json.dump(data, fh, indent=1)
+    lines = ["# The handshake's load path", "",
+             "Generated by `python tools/load_path_audit.py --report reports/load-path"
+             + (" --before CHECKOUT" if before else "") + "` (neutral controller, pocket2-sil, "
+             "2 ms; palm on palm: the sensored hand's palmar palm pieces against the partner's "
+             "palm piece, thenars and thumbs left out; counted twice: the smaller of two "
+             "contacts of one partner geom on two skin geoms under 2 mm apart; over grip, shake "
+             "and hold; the gap and the wrist's travel over the shake).", "",
+             machine_line(data["machine"]), ""]
+    for key, title in (("before", "Before (the sensored hand fixed, the partner's stiff weld)"),
+                       ("after", "Now (both hands on arms)")):
+        if key not in data:
+            continue
+        runs = ", ".join(f"{v:.0f}" for v in data[key]["step_us_runs"])
+        lines += [f"## {title}", "", f"mj_step at mid-shake: {data[key]['step_us']:.0f} us, the "
+                  f"least of 3 processes interleaved with the other checkout's ({runs} us; each "
+                  "the median of 5 x 2000 steps).", "", _TABLE_HEAD, _TABLE_RULE]
+        lines += [_row(r) for r in data[key]["rows"]]
+        lines.append("")
+    lines += ["## The hold", "", "The force between the hands over the first and last 50 ms of "
+              "the 0.52 s hold; on relaxation pads, the fall the QLV laws give for the pads' "
+              "compression histories (force-weighted) and the share of the hold's force that "
+              "went through a pad.", "",
+              "| skin | representation | start N | end N | fall % | QLV of the pads, fall % "
+              "| through pads % |", "|---|---|---|---|---|---|---|"]
+    for h in data["hold"]:
+        q = "-" if h["qlv_decay_pct"] is None else f"{h['qlv_decay_pct']:.1f}"
+        lines.append(f"| {h['design']} | {h['representation']} | {h['force_start_N']:.2f} | "
+                     f"{h['force_end_N']:.2f} | {h['decay_pct']:.1f} | {q} | "
+                     f"{h['pad_share_pct']:.0f} |")
+    lines += ["", "## Overload", "", "| case | largest region N | deepest pair mm (pair, t) | "
+              "bone on bone peak N (t) | first overload |", "|---|---|---|---|---|"]
+    for o in data["overload"]:
+        first = ("-" if not o["first_overload"] else f"t = {o['first_overload_time_s']:.2f} s: "
+                 + ", ".join(f"{k} {v:.1f} N" for k, v in o["first_overload"].items()))
+        lines.append(f"| {o['case']} | {o['max_region_N']:.1f} | {o['deepest_pair_mm']:.1f} "
+                     f"({o['deepest_pair']}, {o['deepest_pair_time_s']:.2f} s) | "
+                     f"{o['bone_on_bone_peak_N']:.1f} ({o['bone_on_bone_peak_time_s']:.2f} s) | "
+                     f"{first} |")
+    with open(out + ".md", "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+
+
+_TABLE_HEAD = ("| hand | seed | palm on palm % | palm gap mm (median, max) | counted twice % | "
+               "wrist travel mm (x, y, z) | bone on bone N | deepest pair mm | hold fall % |")
+_TABLE_RULE = "|---|---|---|---|---|---|---|---|---|"
+
+
+def _row(r: dict) -> str:
+    g = r["palm_gap_mm"]
+    decay = r.get("hold_force_decay")
+    decay = "-" if decay is None else f"{100 * decay:.1f}"
+    return (f"| {r['hand']} | {r['seed']} | {100 * r['palm_on_palm_share']:.1f} | "
+            f"{g['median']:.1f}, {g['max']:.1f} | {100 * r['double_count_share']:.1f} | "
+            f"{', '.join(f'{v:.1f}' for v in r['wrist_travel_mm'])} | "
+            f"{r['bone_on_bone_peak_N']:.2f} | {r['deepest_pair_mm']:.1f} | {decay} |")
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seed", type=int, default=0)
@@ -128,19 +281,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--representation", default=None)
     p.add_argument("--json", default=None)
     p.add_argument("--table", action="store_true")
+    p.add_argument("--step-cost", action="store_true")
+    p.add_argument("--report", default=None, help="write REPORT.md and REPORT.json")
+    p.add_argument("--before", default=None, help="another checkout, for the report")
     a = p.parse_args(argv)
+    if a.step_cost:
+        print(step_cost_us())
+        return 0
+    if a.report:
+        write_report(a.report, a.before)
+        return 0
     if a.table:
         rows = [audit(s) for s in range(5)] + [audit(0, "human")]
-        print("| hand | seed | palm on palm % | palm gap mm (median, max) | counted twice % | "
-              "wrist travel mm (x, y, z) | bone on bone N | deepest pair mm | hold decay % |")
-        print("|---|---|---|---|---|---|---|---|---|")
+        print(_TABLE_HEAD)
+        print(_TABLE_RULE)
         for r in rows:
-            g = r["palm_gap_mm"]
-            decay = "-" if r["hold_force_decay"] is None else f"{100 * r['hold_force_decay']:.1f}"
-            print(f"| {r['hand']} | {r['seed']} | {100 * r['palm_on_palm_share']:.1f} | "
-                  f"{g['median']:.1f}, {g['max']:.1f} | {100 * r['double_count_share']:.1f} | "
-                  f"{', '.join(f'{v:.1f}' for v in r['wrist_travel_mm'])} | "
-                  f"{r['bone_on_bone_peak_N']:.2f} | {r['deepest_pair_mm']:.1f} | {decay} |")
+            print(_row(r))
         if a.json:
             with open(a.json, "w") as fh:
                 json.dump(rows, fh, indent=1)

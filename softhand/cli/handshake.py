@@ -185,6 +185,14 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                f"| bone on bone (peak {acc['bone_on_bone_peak_N']:.1f} N) | "
                f"{share['bone_on_bone']:.1f} % |\n"
                f"| no law | {share['no_law']:.1f} % |")
+    over = summary["overload"]
+    first = (f"first at t = {over['first_overload_time_s']:.2f} s: " + ", ".join(
+        f"{k} {v:.1f} N" for k, v in over["first_overload"].items())
+        if over["first_overload"] else "none")
+    click.echo(f"overload: deepest skin-tissue pair {over['deepest_pair_mm']:.1f} mm "
+               f"({over['deepest_pair'] or '-'}, t = {over['deepest_pair_time_s']:.2f} s); "
+               f"bone on bone peak {over['bone_on_bone_peak_N']:.1f} N; a region over its "
+               f"overload force or a bone bottoming out: {first}")
     click.echo(f"skin force no embedded sensor sees: {acc['unsensed_share_pct']:.1f} %; "
                f"contact time beyond a law's range: {acc['out_of_range_time_pct']:.1f} %")
     laws = ", ".join(f"{k} {v:.1f} %" for k, v in sorted(acc["by_law_share_pct"].items(),

@@ -162,6 +162,11 @@ def _phase_index(ends: np.ndarray, t: np.ndarray) -> np.ndarray:
 #: Time from the end of the reach to the grasp posture (s): the digits close over the other hand
 #: in the first part of the grip phase. assumption.
 CLOSE_S = 0.2
+#: In the hold (the published 0.52 s of no movement) the partner keeps its grip effort, the
+#: flexion offset its regulator had at the end of the shake, instead of regulating the force:
+#: the hands hold still (assumption: a person holds the posture, not the force, for half a
+#: second), so the skins' relaxation shows as a fall of the force.
+HOLD_KEEPS_EFFORT = True
 #: Largest grip effort (rad of extra flexion target on every flexing digit joint). With the
 #: impedance of softhand.hands.partner it presses a phalanx with a few newtons: the regulator
 #: never needs it whole in a light handshake, so it does not saturate into a fist.
@@ -310,13 +315,15 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
         phase = phase_at(ends[w], t[w])
         if phase == 1 or phase == 2 or phase == 3:  # HOLDING
             s = _min_jerk((t[w] - ends[w, 0]) / CLOSE_S)
-            target = grip_N[w]
-            error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
-            # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
-            # proportional part adds half of it
-            integral[w] = _clip(integral[w] + MAX_EFFORT_RAD * error * dt / 0.1, 0.0,
-                                MAX_EFFORT_RAD)
-            efforts[w] = _clip(integral[w] + 0.5 * MAX_EFFORT_RAD * error, 0.0, MAX_EFFORT_RAD)
+            if phase != 3:  # the hold keeps the effort of the shake's end (HOLD_KEEPS_EFFORT)
+                target = grip_N[w]
+                error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
+                # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
+                # proportional part adds half of it
+                integral[w] = _clip(integral[w] + MAX_EFFORT_RAD * error * dt / 0.1, 0.0,
+                                    MAX_EFFORT_RAD)
+                efforts[w] = _clip(integral[w] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
+                                   MAX_EFFORT_RAD)
             for j in range(out.shape[1]):
                 q = (open_q[w, j] + s * (grasp_q[w, j] - open_q[w, j])
                      + efforts[w] * effort_dir[w, j])

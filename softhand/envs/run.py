@@ -78,6 +78,29 @@ class HandshakeRun:
     #: wall time of the first env step (s), left out of ``wall_s`` and ``steps``: on a machine's
     #: first run it compiles the step's kernels (numba, about 7 s once; then read from its cache)
     first_step_s: float = 0.0
+    #: per frame: the deepest penetration (mm) of a law-carrying pair between the hands, and the
+    #: pair (its two geoms' names joined by "/"; "" where none touches)
+    pair_depth_mm: np.ndarray | None = None
+    pair_depth_pair: list[str] = field(default_factory=list)
+    #: the episode's first overload (the env's beyond_range_summary: time s and what, N)
+    first_overload: dict = field(default_factory=dict)
+
+    def overload(self) -> dict:
+        """Where the episode overloaded: the deepest pair (mm, its geoms, when), the bone-on-bone
+        peak (N) and when the first overload began and what (the env's
+        ``info["overload_started"]``: a region over the scenario's overload_N, or a bone
+        bottoming out under a region)."""
+        depth = self.pair_depth_mm if self.pair_depth_mm is not None else np.zeros(1)
+        k = int(np.argmax(depth)) if depth.size else 0
+        rigid = self.rigid_force_N if self.rigid_force_N is not None else np.zeros(1)
+        j = int(np.argmax(rigid)) if rigid.size else 0
+        return {"deepest_pair_mm": float(depth[k]) if depth.size else 0.0,
+                "deepest_pair": self.pair_depth_pair[k] if self.pair_depth_pair else "",
+                "deepest_pair_time_s": float(self.time_s[k]) if depth.size else 0.0,
+                "bone_on_bone_peak_N": float(rigid[j]) if rigid.size else 0.0,
+                "bone_on_bone_peak_time_s": float(self.time_s[j]) if rigid.size else 0.0,
+                "first_overload_time_s": self.first_overload.get("time_s"),
+                "first_overload": self.first_overload.get("what")}
 
     def grasp_checks(self) -> dict:
         """What a hand biomechanist checks (softhand.hands.grasp.grasp_metrics), from the
@@ -252,6 +275,46 @@ class HandshakeRun:
                            "soft_contact_error_pct": worst(cal.soft_contact.force(depth))}
         return out
 
+    def hold_relaxation(self, *, window_s: float = 0.05) -> dict[str, float]:
+        """What the motionless hold shows: the force between the hands over its first and last
+        ``window_s`` (N, means) and its fall (``decay_pct``); on relaxation pads, the fall the
+        skins' QLV laws give for the pads' own compression histories, weighted by the force each
+        pad carries (``qlv_decay_pct``: sum over the pads of F_QLV(t, x(t)) at the end against
+        the start), and the share of the hold's force between the hands that went through a
+        pad's spring (``pad_share_pct``; the rest meets the tissue's law alone). The partner
+        regulates its grip force in the hold (softhand.envs.partner), so the hand-level force
+        is held, not the indentation: the skins creep rather than the force falling.
+        Empty without a hold."""
+        hold = np.array([p == "hold" for p in self.phase])
+        if not hold.any() or self.palm_force_N is None:
+            return {}
+        t = self.time_s
+        start = hold & (t < t[hold][0] + window_s)
+        end = hold & (t > t[hold][-1] - window_s)
+        between = self.palm_force_N[:, 1]
+        f0, f1 = float(between[start].mean()), float(between[end].mean())
+        out = {"hold_s": float(t[hold][-1] - t[hold][0]), "force_start_N": f0,
+               "force_end_N": f1, "decay_pct": 100.0 * (1.0 - f1 / f0) if f0 > 0 else 0.0,
+               "qlv_decay_pct": None, "pad_share_pct": 0.0}
+        if self.pad_compression_mm is None or self.accounting is None:
+            return out
+        from softhand.skin.files import load_calibration
+
+        q0 = q1 = 0.0
+        for i, region in enumerate(self.region_names):
+            x = self.pad_compression_mm[:, i]
+            if not np.isfinite(x).all():
+                continue
+            law = load_calibration(self.skins[region], self.calibration_dir).law
+            qlv = law.force(t - t[0], np.maximum(x, 0.0))
+            q0 += float(qlv[start].mean())
+            q1 += float(qlv[end].mean())
+        n = len(ACCOUNT_CLASSES)
+        acc = self.accounting[hold, :n]
+        out["qlv_decay_pct"] = 100.0 * (1.0 - q1 / q0) if q0 > 0 else None
+        out["pad_share_pct"] = 100.0 * float(acc[:, 0].sum() / max(acc.sum(), 1e-12))
+        return out
+
     def table(self) -> dict[str, dict[str, float]]:
         """Per region: peak and mean force (N) and contact area (mm^2) over the handshake, and
         the embedded sensor's peak and mean reading (``sensor_peak``, ``sensor_mean``: N on the
@@ -285,6 +348,8 @@ class HandshakeRun:
                 "paper_over_2N": self.paper_comparison(), "skins": self.skins,
                 "rigid_contact_peak_N": float(rigid.max()),
                 "force_accounting": self.force_accounting(),
+                "overload": self.overload(),
+                "hold": self.hold_relaxation(),
                 "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s,
                 "realtime_factor": self.steps * float(self.model.opt.timestep) / self.wall_s,
@@ -391,6 +456,9 @@ class ContactAreas:
         self.n_regions = len(region_geoms)
         #: after each call: per region, normal force (N) of all its skin geom's contacts
         self.skin_force = np.zeros(self.n_regions)
+        #: after each call: the deepest penetration (m) of a law-carrying pair between the hands
+        #: and its two geoms (0, -1, -1: none touching)
+        self.deepest: tuple[float, int, int] = (0.0, -1, -1)
         self._force = np.zeros(6)
 
     def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float, np.ndarray]:
@@ -402,6 +470,7 @@ class ContactAreas:
         acc = self.accounting
         acc[:] = 0.0
         self.skin_force[:] = 0.0
+        deepest = (0.0, -1, -1)
         n = len(ACCOUNT_CLASSES)
         for i in range(data.ncon):
             c = data.contact[i]
@@ -413,6 +482,8 @@ class ContactAreas:
             g1, g2 = c.geom1, c.geom2
             if self.hand[g1] >= 0 and self.hand[g2] >= 0 and self.hand[g1] != self.hand[g2]:
                 law = self.laws.get((min(g1, g2), max(g1, g2)))
+                if law is not None and -c.dist > deepest[0]:
+                    deepest = (float(-c.dist), min(g1, g2), max(g1, g2))
                 if law is not None and len(law) > 2:
                     acc[n + 3 + law[2]] += f
                 if law is not None and law[0] == 0 and max(self.pad_joint[g1],
@@ -443,6 +514,7 @@ class ContactAreas:
                 r = self.region_of[g]
                 if r >= 0 and depth > 0 and self._in_zone(data, r, c.pos):
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
+        self.deepest = deepest
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
 
     def _pad_share(self, data: mujoco.MjData, c) -> float:
@@ -563,7 +635,8 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
              for prefix, pieces in (("pro_skin_", PALM_PIECES["prosthetic"]),
                                     ("hum_tissue_", PALM_PIECES["partner"]))]
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc", "sf", "pf", "s", "g", "pp")}
+                                                "acc", "sf", "pf", "s", "g", "pp", "dp", "dn")}
+    geom_name = [m.geom(g).name for g in range(m.ngeom)]
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
                   for g in base.region_geoms]
     pads = np.array([m.jnt_qposadr[j] if j >= 0 else -1 for j in pad_joints])
@@ -594,6 +667,9 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
             frames["a"].append(area)
             frames["r"].append(rigid)
             frames["acc"].append(areas.accounting.copy())
+            depth, g1, g2 = areas.deepest
+            frames["dp"].append(1e3 * depth)
+            frames["dn"].append(f"{geom_name[g1]}/{geom_name[g2]}" if g1 >= 0 else "")
             if has_pads:  # the pads' force at this frame's state (mj_step leaves the forces
                 # of the state it started from), so that compression and force go together
                 mujoco.mj_forward(m, d)
@@ -606,6 +682,10 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
         raise DivergenceError(base.physics.divergence, skins=base.skins,
                               representations=base.representations,
                               timestep_s=float(m.opt.timestep))
+    summary = info.get("beyond_range_summary") or {}
+    first_overload = ({"time_s": summary["first_overload_time_s"],
+                       "what": summary["first_overload"]}
+                      if summary.get("first_overload") else {})
     timed = steps - base.frame_skip  # the physics steps of the timed env steps
     if timed == 0:  # an episode of one env step: its speed is that step's
         wall, timed, first = first, steps, 0.0
@@ -624,4 +704,5 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
                         {"hand": base.hand, "partner_size_mm": list(base.partner_size_mm),
                          "seed": seed, "options": dict(options or {}),
                          "softhand_version": __version__},
-                        tuple(law_labels(base)), base.contact_laws, first)
+                        tuple(law_labels(base)), base.contact_laws, first,
+                        np.array(frames["dp"]), frames["dn"], first_overload)

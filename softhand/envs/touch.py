@@ -11,6 +11,7 @@ is the specification of the action, observation and ``info`` that every touch sh
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
@@ -341,6 +342,7 @@ class TwoHandTouchEnv(gym.Env):
             self._estimate = self.sensors.estimate
             self._saturated = physics.saturated_sensors()
             self._check_range(*physics.contacts_above(self._range), physics.time)
+            self._check_overload(self._forces, self._bone, physics.time)
         d = self.data
         now = diverged.time_s if unstable else d.time
         phase = scenario.phase(now)
@@ -427,6 +429,31 @@ class TwoHandTouchEnv(gym.Env):
         self._beyond_steps = 0  # pair contacts beyond range, summed over the episode's steps
         self._bone_steps = 0  # regions with bone bottoming out, summed over the steps
         self._worst: dict[str, tuple[float, float, float]] = {}  # pair -> (N, limit N, t s)
+        n = len(self.region_names)
+        self._over = np.zeros(n, bool)  # regions over the scenario's overload_N at this step
+        self._bottoming = np.zeros(n, bool)  # regions whose bone bottoms out at this step
+        self._overload_started: dict[str, float] = {}  # what began to overload at this step
+        self._first_overload: tuple[float, dict[str, float]] | None = None  # (t s, what)
+
+    def _check_overload(self, forces: np.ndarray, bone: np.ndarray, t: float) -> None:
+        """Name what begins to overload at this step (``info["overload_started"]``): each region
+        whose load (N) passes the scenario's ``overload_N`` (none if it has none), as
+        ``{region: N}``, and each region whose bone begins to bottom out under its skin, as
+        ``{"{region} bone": N}``; the episode's first such step is kept for its summary
+        (``first_overload_time_s``, ``first_overload``). The vector env calls it per world."""
+        limit = getattr(self.scenario, "overload_N", math.inf)
+        over, bottoming = forces > limit, bone > 0.0
+        started: dict[str, float] = {}
+        if over.any() or bottoming.any():
+            names = self.region_names
+            for i in np.flatnonzero(over & ~self._over).tolist():
+                started[names[i]] = float(forces[i])
+            for i in np.flatnonzero(bottoming & ~self._bottoming).tolist():
+                started[f"{names[i]} bone"] = float(bone[i])
+            if started and self._first_overload is None:
+                self._first_overload = (float(t), dict(started))
+        self._over, self._bottoming = over, bottoming
+        self._overload_started = started
 
     def _check_range(self, geoms: np.ndarray, force: np.ndarray, top: np.ndarray,
                      t: float) -> None:
@@ -461,7 +488,11 @@ class TwoHandTouchEnv(gym.Env):
                                "bone_steps": self._bone_steps, "worst_pair": None,
                                "worst_skin": None, "worst_force_N": None, "worst_limit_N": None,
                                "worst_time_s": None, "steps": self._episode_steps,
-                               "time_s": float(self.data.time if time_s is None else time_s)}
+                               "time_s": float(self.data.time if time_s is None else time_s),
+                               "first_overload_time_s": None, "first_overload": None}
+        if self._first_overload is not None:
+            out.update(first_overload_time_s=self._first_overload[0],
+                       first_overload=dict(self._first_overload[1]))
         if self._worst:
             name, (f, lim, t) = max(self._worst.items(), key=lambda kv: kv[1][0] / kv[1][1])
             out.update(worst_pair=name, worst_skin=skin_of_pair(name, self.skins)[1],
@@ -487,6 +518,10 @@ class TwoHandTouchEnv(gym.Env):
         if summary["bone_steps"]:
             parts.append(f"a bone bottomed out under a region in {summary['bone_steps']} "
                          "region-steps (outside every law's calibration)")
+        if parts and summary["first_overload"]:
+            what = ", ".join(f"{k} {v:.1f} N" for k, v in summary["first_overload"].items())
+            parts.append(f"the first overload began at t = {summary['first_overload_time_s']:.2f}"
+                         f" s ({what}; info['overload_started'])")
         if parts:
             where = " (info['beyond_range_summary'])" if how == "ended" else ""
             warn_at_caller(f"episode {how} at t = {summary['time_s']:.2f} s after "
@@ -516,4 +551,5 @@ class TwoHandTouchEnv(gym.Env):
                 "contacts_beyond_range": self._beyond + self._bottomed,
                 "pairs_beyond_range_N": dict(self._beyond_N),
                 "region_bone_N": dict(zip(names, self._bone.tolist(), strict=True)),
+                "overload_started": dict(self._overload_started),
                 **self.scenario.info()}

@@ -300,6 +300,7 @@ class HandshakeVectorEnv(VectorEnv):
             env = self.envs[w]
             env._bone = bone[w]
             env._check_range(*phys.contacts_above(int(w), env._range), float(now[w]))
+            env._check_overload(self._forces[w], bone[w], float(now[w]))
         time_s = np.array([d.time_s if d is not None else now[w]
                            for w, d in enumerate(diverged)])
         terms = self._terms(a, time_s)
@@ -410,6 +411,8 @@ class HandshakeVectorEnv(VectorEnv):
                 "pairs_beyond_range_N": np.array([dict(e._beyond_N) for e in self.envs],
                                                  dtype=object),
                 "region_bone_N": self._bone.copy(),
+                "overload_started": np.array([dict(e._overload_started) for e in self.envs],
+                                             dtype=object),
                 "partner_grip_N": script.grip_forces_N.copy(),
                 "partner_grip_measured_N": self._worlds.grip_measured_N.copy(),
                 "partner_effort_rad": script.efforts.copy(),

@@ -182,7 +182,9 @@ class _Problem:
         name = lambda i: m.geom(i).name  # noqa: E731
         geoms = range(m.ngeom)
         self.pro_soft = [g for g in geoms if name(g).startswith("pro_skin_")]
-        self.hum_soft = [g for g in geoms if name(g).startswith("hum_tissue_")]
+        # the hand's pieces only: the forearm's tissue is not a target of the grasp
+        self.hum_soft = [g for g in geoms if name(g).startswith("hum_tissue_")
+                         and name(g) != "hum_tissue_forearm"]
         self.pro_bone = [g for g in geoms if name(g).startswith("pro_bone_")]
         self.hum_bone = [g for g in geoms if name(g).startswith("hum_bone_")]
         gid = lambda n: m.geom(n).id  # noqa: E731

@@ -21,6 +21,10 @@ on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hul
 ``tissue_palm`` (palmar and dorsal sides and borders: the grasp's fingers wrap the ulnar border,
 where a seam between two pieces resisted one indentation twice). No point lies inside two tissue
 geoms at rest, so no indentation is resisted by two laws at once.
+The forearm stub wears ``tissue_forearm``, a capsule of the forearm's radius over its bone (the
+skin's thickness of soft tissue, taken as the hand's: assumption, no forearm indentation data
+used), so that a sensored finger meeting the partner's wrist meets tissue, not a bare bone; the
+grasp's targets leave it out (softhand.hands.grasp sees the hand's pieces only).
 List them with partner_tissue_geoms(). Each has a contact sensor ``feel_{piece}`` on its contacts
 (one net-force slot: found, force xyz in the world frame): what the partner feels there, whatever
 touches it. Rigid bones (``bone_*``) collide with the prosthetic bones.
@@ -47,6 +51,7 @@ from softhand.hands.skeleton import (
 )
 
 __all__ = [
+    "FOREARM_TISSUE",
     "JOINT_KP_SHARE",
     "PARTNER_JOINTS",
     "TISSUE_SEGMENTS",
@@ -69,6 +74,10 @@ TISSUE_SEGMENTS: tuple[str, ...] = (
     "thumb_distal",
     *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
 )
+
+#: The forearm's tissue (a capsule over the forearm stub's bone, module docstring): a tissue geom
+#: of the scene, not a piece of the hand's envelope.
+FOREARM_TISSUE = "forearm"
 
 #: The partner's digit joints (short names), thumb first: the order of its digit servos.
 PARTNER_JOINTS: tuple[str, ...] = (
@@ -146,6 +155,13 @@ def add_partner_hand(
             conaffinity=const.BONE_BITS["partner"][1],
             rgba=list(_BONE_RGBA),
         )
+        # its tissue ends where the palm's begins (the wrist crease, x = 0): the capsule's cap
+        # reaches x = 0 from its end at -r_arm
+        forearm.add_geom(name=f"{prefix}tissue_{FOREARM_TISSUE}", type=_CAPSULE, size=[r_arm, 0, 0],
+                         fromto=[-config.forearm_length_m, 0, 0, -r_arm, 0, 0], mass=0.0,
+                         contype=0, conaffinity=0, group=2, rgba=list(_TISSUE_RGBA))
+        add_contact_sensor(spec, f"{prefix}feel_{FOREARM_TISSUE}",
+                           f"{prefix}tissue_{FOREARM_TISSUE}", netforce=True)
 
     # Armature = damping x mechanical time constant (constants.PARTNER: why). No passive springs:
     # each joint's impedance is its servo (below).
@@ -229,17 +245,21 @@ def build_partner_hand(config: PartnerConfig | None = None, prefix: str = "hum_"
 def partner_tissue_geoms(
     model_or_spec: mujoco.MjModel | mujoco.MjSpec, prefix: str = "hum_"
 ) -> tuple[str, ...]:
-    """Names of the partner's tissue geoms (order of TISSUE_SEGMENTS), checked to exist.
+    """Names of the partner's tissue geoms (order of TISSUE_SEGMENTS, then the forearm's where
+    the hand has a forearm stub), checked to exist.
 
     Raises:
         ValueError: if one is missing from ``model_or_spec``.
     """
+
+    def found(name: str) -> bool:
+        if isinstance(model_or_spec, mujoco.MjSpec):
+            return model_or_spec.geom(name) is not None
+        return mujoco.mj_name2id(model_or_spec, mujoco.mjtObj.mjOBJ_GEOM, name) >= 0
+
     names = tuple(f"{prefix}tissue_{seg}" for seg in TISSUE_SEGMENTS)
     for name in names:
-        if isinstance(model_or_spec, mujoco.MjSpec):
-            found = model_or_spec.geom(name) is not None
-        else:
-            found = mujoco.mj_name2id(model_or_spec, mujoco.mjtObj.mjOBJ_GEOM, name) >= 0
-        if not found:
+        if not found(name):
             raise ValueError(f"partner tissue geom {name!r} not found (prefix = {prefix!r})")
-    return names
+    forearm = f"{prefix}tissue_{FOREARM_TISSUE}"
+    return (*names, forearm) if found(forearm) else names
