@@ -177,14 +177,15 @@ def test_population_starts_with_a_header(stand_in_partners, tmp_path, args, head
      "prosthetic hand, solid-pu on every region, controller force | partner seed 4, hand "
      "180 x 85 mm | at t = 1.5 s"),
     (["--sheet", "--hand", "human"], "the relaxed human hand (the paper's protocol) | partner "
-                                     "seed 0 | at the end of the grip and mid-shake, 3 views each"),
+                                     "seed 0 | at the end of the grip, mid-shake and mid-hold, "
+                                     "4 views each"),
 ])
 def test_render_starts_with_a_header(monkeypatch, tmp_path, args, header):
     import softhand.envs.handshake
     import softhand.envs.run
     import softhand.viz.render
 
-    phase = ["reach", "grip", "grip", "shake", "shake", "shake", "release"]
+    phase = ["reach", "grip", "grip", "shake", "shake", "shake", "hold", "hold", "release"]
     run = SimpleNamespace(phase=phase, time_s=np.linspace(0.0, 3.0, len(phase)),
                           qpos=[None] * len(phase), mocap_pos=[None] * len(phase),
                           mocap_quat=[None] * len(phase), region_names=[],

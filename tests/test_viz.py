@@ -321,3 +321,30 @@ def test_pictures_by_force_colour_each_region_by_its_force():
     assert gid("pro_skin_Index3") not in colours
     assert np.allclose(colours[gid("hum_tissue_palm")][:3], HAND_COLOURS["hum_tissue_"][:3])
 
+
+
+def test_write_video_is_a_looping_gif_of_the_frames_and_refuses_bad_input(tmp_path):
+    """`write_video`: every frame in order at the given rate, one palette, looping; bad input
+    named before anything is written."""
+    from PIL import Image
+
+    from softhand.viz.render import write_video
+
+    rng = np.random.default_rng(0)
+    frames = [np.full((24, 32, 3), (20 * i, 100, 200 - 20 * i), np.uint8) for i in range(5)]
+    frames[2][:, :8] = rng.integers(0, 255, (24, 8, 3), dtype=np.uint8)  # some texture
+    path = write_video(frames, tmp_path / "hs.gif", fps=12.5)
+    with Image.open(path) as gif:
+        assert gif.n_frames == 5 and gif.info["duration"] == 80 and gif.info["loop"] == 0
+        for i in (0, 4):
+            gif.seek(i)
+            got = np.asarray(gif.convert("RGB"))
+            assert np.abs(got.astype(int) - frames[i]).max() <= 8, i  # palette rounding only
+    for kwargs, match in (({"frames": [], "fps": 10}, "at least one picture"),
+                          ({"frames": [frames[0], frames[0][:10]], "fps": 10}, "one size"),
+                          ({"frames": frames, "fps": 0}, r"fps = 0: expected a number in \(0, 100\]")):
+        with pytest.raises(ValueError, match=match):
+            write_video(path=tmp_path / "bad.gif", **kwargs)
+    assert not (tmp_path / "bad.gif").exists()
+    with pytest.raises(ValueError, match=r"\.gif"):
+        write_video(frames, tmp_path / "hs.png", fps=10)

@@ -286,11 +286,16 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
 @click.option("--partner-size", "partner_size", default=None, metavar="LENGTH_MM,WIDTH_MM",
               help="The partner's hand, within +-2.5 SD of the paper's subjects.")
 @click.option("--sheet", is_flag=True,
-              help="A contact sheet instead: at grip and mid-shake, from the back of each hand "
-                   "and from below, regions coloured by force (ignores the camera options).")
+              help="A contact sheet instead: at the end of the grip, mid-shake and mid-hold, from "
+                   "the back of each hand, from below and from the thumb side, regions coloured "
+                   "by force (ignores the camera options).")
+@click.option("--video", is_flag=True,
+              help="An animated GIF of the whole handshake instead (OUT .gif): the env's "
+                   "rgb_array frames from the camera options, 12.5 frames per second of "
+                   "simulated time.")
 @_OPT_HAND
 def render(out, design, controller, seed, at_s, azimuth, elevation, distance, size,
-           partner_size, sheet, hand) -> None:
+           partner_size, sheet, video, hand) -> None:
     """Run one handshake and render the scene at one moment to OUT (.png), offscreen.
 
     Needs an OpenGL context: MUJOCO_GL=egl (set here when unset) or osmesa.
@@ -300,24 +305,41 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     from softhand.envs.physics import DivergenceError
     from softhand.envs.run import run_handshake
     from softhand.envs.skins import DEFAULT_DESIGN
-    from softhand.viz.render import CameraView, SheetFrame, render_sheet, render_state
+    from softhand.viz.render import (
+        CameraView,
+        SheetFrame,
+        render_sheet,
+        render_state,
+        write_video,
+    )
 
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
-    path = checked_file(out, "OUT", ".png")
+    if sheet and video:
+        bad("--sheet and --video: choose one")
+    path = checked_file(out, "OUT", ".gif" if video else ".png")
     size_mm = _partner_size(partner_size)
     _check_hand(hand, controller, design=design)
+    view = CameraView(distance_m=distance, azimuth_deg=azimuth, elevation_deg=elevation)
     try:
-        env = HandshakeEnv(design=design, partner_size=size_mm, hand=hand)
+        env = HandshakeEnv(design=design, partner_size=size_mm, hand=hand,
+                           **({"render_mode": "rgb_array", "render_size": tuple(size),
+                               "render_view": view} if video else {}))
     except ValueError as exc:
         bad(str(exc))
-    when = ("at the end of the grip and mid-shake, 3 views each" if sheet
+    when = ("at the end of the grip, mid-shake and mid-hold, 4 views each" if sheet
+            else "the whole handshake, 12.5 frames/s" if video
             else "at mid-shake" if at_s is None else f"at t = {at_s:g} s")
     click.echo(_header("render", _sensored_hand(hand, f"{design or DEFAULT_DESIGN} on every "
                                                 "region", f"controller {controller}"),
                        f"partner seed {seed}" + ("" if size_mm is None else
                                                  f", hand {size_mm[0]:g} x {size_mm[1]:g} mm"),
                        when))
+    if video:
+        frames = _video_frames(env, controller, seed)
+        write_video(frames, path, fps=VIDEO_FPS)
+        click.echo(f"wrote {path} ({len(frames)} frames, {VIDEO_FPS:g} per second)")
+        return
     try:
         run = run_handshake(controller=controller, seed=seed, env=env)
     except DivergenceError as exc:  # one line, exit 3 (render runs at the default timestep)
@@ -327,19 +349,20 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
     if sheet:
         grip = [i for i, p in enumerate(run.phase) if p == "grip"]
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]
+        hold = [i for i, p in enumerate(run.phase) if p == "hold"]
         frames = []
-        for k, what in ((grip[-1], "end of the grip"), (shake[len(shake) // 2], "mid-shake")):
+        for k, what in ((grip[-1], "end of the grip"), (shake[len(shake) // 2], "mid-shake"),
+                        (hold[len(hold) // 2], "mid-hold")):
             frames.append(SheetFrame(run.qpos[k], run.mocap_pos[k], run.mocap_quat[k],
                                      f"{what}, t = {run.time_s[k]:.2f} s", _skin_forces(run, k)))
         render_sheet(run.model, frames, path)
-        click.echo(f"wrote {path} (end of the grip and mid-shake, 3 views each)")
+        click.echo(f"wrote {path} (end of the grip, mid-shake and mid-hold, 4 views each)")
         return
     if at_s is None:
         shake = [i for i, p in enumerate(run.phase) if p == "shake"]
         k = shake[len(shake) // 2]
     else:
         k = int(np.argmin(np.abs(run.time_s - at_s)))
-    view = CameraView(distance_m=distance, azimuth_deg=azimuth, elevation_deg=elevation)
     render_state(run.model, run.qpos[k], run.mocap_pos[k], run.mocap_quat[k], path,
                  width=size[0], height=size[1], view=view,
                  region_force_N=_skin_forces(run, k),
@@ -352,3 +375,32 @@ def _skin_forces(run, k: int) -> dict[str, float]:
     """Each region's skin geom and its force (N) at frame ``k`` of a HandshakeRun."""
     return {f"pro_skin_{r}": float(run.region_force_N[k, i])
             for i, r in enumerate(run.region_names)}
+
+
+#: Frames per second of simulated time in `softhand render --video` (every 8th env step of 10 ms)
+VIDEO_FPS = 12.5
+
+
+def _video_frames(env, controller: str, seed: int) -> list[np.ndarray]:
+    """One handshake of ``env`` (made with ``render_mode="rgb_array"``) under ``controller``,
+    and its ``render()`` every 1 / VIDEO_FPS s of simulated time."""
+    from softhand.envs.controllers import make_controller
+    from softhand.envs.physics import DivergenceError
+
+    policy = make_controller(controller)
+    every = max(1, round(1.0 / (VIDEO_FPS * env._action_period_s)))
+    obs, info = env.reset(seed=seed)
+    frames, k = [env.render()], 0
+    while True:
+        obs, _, terminated, truncated, info = env.step(policy(obs, info))
+        k += 1
+        if info.get("unstable"):
+            exc = DivergenceError(env.physics.divergence, skins=env.skins,
+                                  representations=env.representations,
+                                  timestep_s=float(env.model.opt.timestep))
+            raise Stopped(f"error: {exc.summary}; softhand handshake --timestep "
+                          f"{exc.suggested_timestep_s:g} tries a smaller one", EXIT_CONVERGENCE)
+        if k % every == 0 or terminated or truncated:
+            frames.append(env.render())
+        if terminated or truncated:
+            return frames

@@ -142,10 +142,11 @@ class HandshakeRun:
 
     def grip_tracking(self) -> dict[str, float]:
         """How well the partner's summed digit force followed its target while it held the hand
-        (grip and shake, after its first 0.25 s): mean measured and target (N), and the 95th
-        percentile of the relative error (%)."""
+        (grip and shake, after its first 0.25 s; not the hold, where it keeps its effort instead
+        of regulating: softhand.envs.partner.HOLD_KEEPS_EFFORT): mean measured and target (N),
+        and the 95th percentile of the relative error (%)."""
         g = self.partner_grip_N
-        holding = np.array([p in HOLDING for p in self.phase])
+        holding = np.array([p in ("grip", "shake") for p in self.phase])
         if g is None or not holding.any():
             return {"measured_N": 0.0, "target_N": 0.0, "p95_error_pct": float("nan")}
         start = self.time_s[holding][0] + 0.25

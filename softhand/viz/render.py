@@ -33,7 +33,7 @@ from softhand.envs.picture import (
 from softhand.io import atomic_open, check_writable_file
 
 __all__ = ["HAND_COLOURS", "SHEET_VIEWS", "CameraView", "SheetFrame", "render_sheet",
-           "render_state"]
+           "render_state", "write_video"]
 
 
 def render_state(model: mujoco.MjModel, qpos: np.ndarray, mocap_pos: np.ndarray,
@@ -77,10 +77,12 @@ class SheetFrame:
     region_force_N: dict[str, float]
 
 
-#: The views of a contact sheet: from the back of each hand and from below.
+#: The views of a contact sheet: from the back of each hand, from below and from the thumb side
+#: (above: both thumbs point up).
 SHEET_VIEWS = {"back of the prosthetic hand": (90.0, -5.0),
                "back of the partner's hand": (270.0, -5.0),
-               "from below": (180.0, 75.0)}
+               "from below": (180.0, 75.0),
+               "from the thumb side": (180.0, -75.0)}
 
 
 def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os.PathLike, *,
@@ -117,6 +119,34 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
     with atomic_open(target, "wb") as fh:
         fig.savefig(fh, format="png", dpi=100)
     plt.close(fig)
+    return target
+
+
+def write_video(frames: list[np.ndarray], path: str | os.PathLike, *, fps: float) -> Path:
+    """An animated GIF (atomic) of ``frames`` ((H, W, 3) uint8 pictures, e.g. the env's
+    ``render()``) at ``fps`` frames per second, looping; one palette for all frames (adaptive,
+    from up to 16 of them), so the hands keep their colours from frame to frame.
+
+    Raises:
+        ValueError: no frames, frames of different sizes, ``fps`` outside (0, 100] or a path
+            that is not a writable ``.gif``.
+    """
+    target = check_writable_file(path, suffix=".gif")
+    if not frames:
+        raise ValueError("frames: expected at least one picture")
+    if len({f.shape for f in frames}) != 1:
+        raise ValueError(f"frames: expected pictures of one size, got {sorted({f.shape for f in frames})}")
+    if not (isinstance(fps, (int, float)) and 0 < fps <= 100):
+        raise ValueError(f"fps = {fps!r}: expected a number in (0, 100]")
+    from PIL import Image
+
+    sample = frames[::max(1, len(frames) // 16)]
+    mosaic = np.concatenate([np.asarray(f, np.uint8)[::2, ::2] for f in sample])
+    palette = Image.fromarray(mosaic).quantize(colors=255)
+    images = [Image.fromarray(np.asarray(f, np.uint8)).quantize(palette=palette) for f in frames]
+    with atomic_open(target, "wb") as fh:
+        images[0].save(fh, format="GIF", save_all=True, append_images=images[1:],
+                       duration=round(1000.0 / fps), loop=0, optimize=False)
     return target
 
 
