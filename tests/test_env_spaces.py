@@ -129,6 +129,11 @@ def test_render_needs_a_render_mode_and_fps_follows_the_env_step(env):
     fast = HandshakeEnv(frame_skip=2)  # 4 ms env steps
     assert fast.metadata["render_fps"] == 250 and HandshakeEnv.metadata["render_fps"] == 100
     fast.close()
+    # before the first reset there is no episode to draw: one clear line, not AttributeError
+    fresh = HandshakeEnv(render_mode="rgb_array")
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before render\(\)"):
+        fresh.render()
+    fresh.close()
 
 
 def test_the_env_renders_from_softhand_renders_view():

@@ -154,6 +154,22 @@ def test_each_pair_takes_the_law_of_its_contact_class():
         np.testing.assert_allclose(spec.pair(name).solimp, solimp, rtol=1e-12)
 
 
+def test_a_pairs_law_follows_the_skin_whatever_the_pairs_geom_order():
+    """MuJoCo's compiler puts a world geom first in a pair: a fingertip pressed by a box fixed
+    to the world (a table, a fixed plate) still takes the fingertip's plate law (phalanx/flat),
+    not the law of a palm pressed by a finger, with the same solref/solimp as the same box on a
+    mocap body."""
+    spec = mujoco.MjSpec.from_file(str(HAND))
+    spec.worldbody.add_geom(name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.05, 0.05, 0.01],
+                            pos=[0.0, 0.0, -0.3])
+    (tip,) = apply_skin(spec, {"index_tip": "pocket2-sil"}, against=["plate", "table"])
+    model = spec.compile()
+    pid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, "skin_index_tip__table")
+    assert model.geom(int(model.pair_geom1[pid])).name == "table"  # the order this is about
+    assert tip.pair_laws["skin_index_tip__table"] == "phalanx/flat"
+    assert tip.pair_laws["skin_index_tip__plate"] == "phalanx/flat"
+
+
 # --- what skin apply writes: the user's file with only the listed changes ------------------
 
 #: A user's hand in their own style: a leading comment and comments between elements, tab

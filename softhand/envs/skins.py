@@ -286,7 +286,10 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
         key, skin = skin_of_pair(name, skins)
         region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
         rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
-        contact = classify(model, int(model.pair_geom1[pid]), int(model.pair_geom2[pid]))
+        g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
+        if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
+            g1, g2 = g2, g1
+        contact = classify(model, g1, g2)
         if skin == "rigid":
             out[name] = PairChoice(contact, "tissue", tissue, float(DATA_MAX_N[HUMAN]))
             continue

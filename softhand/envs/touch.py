@@ -384,12 +384,15 @@ class TwoHandTouchEnv(gym.Env):
         the state, so rendering never changes the episode.
 
         Raises:
-            RuntimeError: the env was made without a render mode, or is closed.
+            RuntimeError: the env was made without a render mode, is closed, or has not been
+                reset (there is no episode to draw yet).
         """
         self._check_open()
         if self.render_mode is None:
             raise RuntimeError("render() needs a render mode: make the env with "
                                "render_mode='rgb_array'")
+        if not self._planned:
+            raise RuntimeError("call reset() before render(): there is no episode to draw yet")
         if self._picture is None:
             self._picture = ScenePicture(self.model, *self.render_size)
             self._picture_data = mujoco.MjData(self.model)

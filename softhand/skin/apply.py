@@ -281,7 +281,11 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
         for name in made[geom]:
             pair = spec.pair(name)
             pid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, name)
-            key = classify(model, int(model.pair_geom1[pid]), int(model.pair_geom2[pid]))
+            # the skin's side by its name: MuJoCo's compiler may put the other geom first (a
+            # world geom, a table or a fixed plate, is always pair_geom1)
+            skin = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, geom)
+            g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
+            key = classify(model, skin, g2 if g1 == skin else g1)
             if law is None:  # rigid: MuJoCo's stock contact
                 stock = StockContact()
                 pair.solref, pair.solimp = list(stock.solref), list(stock.solimp)
