@@ -191,6 +191,28 @@ def test_handshake_json_and_recording(tmp_path):
     assert 0.0 < over["deepest_pair_mm"] < 20.0 and "/" in over["deepest_pair"], over
     assert over["bone_on_bone_peak_N"] == data["force_accounting"]["bone_on_bone_peak_N"] == 0.0
     assert over["first_overload"] is None  # the default run stays under 10 N per region
+    # the arms in use, every field, in the settings
+    assert cfg["sensored_arm"] == {"stiffness_n_per_m": 1000.0, "damping_ns_per_m": 20.0,
+                                   "rot_stiffness_nm_per_rad": 3.0, "mass_kg": 0.8,
+                                   "press_n": 2.0}
+    assert cfg["partner_arm"]["stiffness_n_per_m"] == 1000.0
+
+
+def test_handshake_arm_options_reach_the_arms_and_bad_values_are_one_line():
+    res = run(["handshake", "--press", "3", "--arm-stiffness", "800", "--hand", "human",
+               "--json"])
+    assert res.exit_code == 0, res.output
+    cfg = json.loads(res.stdout)["settings"]
+    assert cfg["sensored_arm"]["press_n"] == 3.0 and cfg["partner_arm"]["press_n"] == 3.0
+    assert cfg["sensored_arm"]["stiffness_n_per_m"] == 800.0
+    assert cfg["sensored_arm"]["rot_stiffness_nm_per_rad"] == 3.0  # the relaxed arm's own
+    for args, needle in ((["--press", "11"], "'--press': '11' is outside the allowed range "
+                                             "0 <= x <= 10 N"),
+                         (["--arm-stiffness", "5"], "'--arm-stiffness': '5' is outside the "
+                                                    "allowed range 20 <= x <= 5000 N/m")):
+        res = run(["handshake", *args])
+        assert res.exit_code == 2 and needle in res.output, res.output
+        assert "Traceback" not in res.output
 
 
 def test_handshake_text_starts_with_a_header_and_explains_fig4():

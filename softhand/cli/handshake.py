@@ -4,6 +4,7 @@ a picture of it."""
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 
 import click
 import numpy as np
@@ -21,6 +22,7 @@ from softhand.cli.inputs import (
     sensor_spec_of,
     with_options,
 )
+from softhand.hands.config import ARM_RANGES
 
 _OPT_CONTACT_LAWS = click.option(
     "--contact-laws", type=click.Choice(["geometry", "plate"]), default="geometry",
@@ -70,10 +72,17 @@ _OPT_HAND = click.option(
                    "[default: 190,88, the experimenter].")
 @_OPT_HAND
 @_OPT_CONTACT_LAWS
+@click.option("--press", "press_N", type=Number(*ARM_RANGES["press_n"], unit="N"), default=None,
+              help="Each arm's push of its palm towards the other's, 0-10 N [default: 2 N, and 0 "
+                   "for the relaxed experimenter of --hand human].")
+@click.option("--arm-stiffness", "arm_stiffness", default=None,
+              type=Number(*ARM_RANGES["stiffness_n_per_m"], unit="N/m"),
+              help="The sensored hand's arm: its endpoint stiffness, 20-5000 N/m [default: 1000, "
+                   "the prosthesis user's; 150 for --hand human, the relaxed experimenter's].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def handshake(design, skin_items, representation, controller, seed, timestep_s, record_path,
-              placement_items, signal, target_N, partner_size, hand, contact_laws, as_json,
-              **sensor_kw) -> None:
+              placement_items, signal, target_N, partner_size, hand, contact_laws, press_N,
+              arm_stiffness, as_json, **sensor_kw) -> None:
     """Shake hands once (shipped calibration, no FE run) and report the force on each region."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.envs.physics import DivergenceError
@@ -93,10 +102,11 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         settings["target_N"] = target_N
     size = _partner_size(partner_size)
     _check_hand(hand, controller, design=design, skins=skin_items, representation=representation)
+    arms = _arms(hand, press_N, arm_stiffness)
     try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
                            timestep_s=timestep_s, sensor=spec, sensor_placement=placement,
-                           partner_size=size, hand=hand, contact_laws=contact_laws)
+                           partner_size=size, hand=hand, contact_laws=contact_laws, **arms)
     except ValueError as exc:
         msg = str(exc)
         if msg.startswith("sensor "):
@@ -126,6 +136,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         "env_step_s": frame_skip * timestep_s, "contact_laws": contact_laws,
         "partner_size_mm": list(summary["episode"]["partner_size_mm"]),
         "sensor_placement": list(placement_items) or None,
+        # the arms in use, every field (--press, --arm-stiffness over softhand.hands.constants.ARMS)
+        "sensored_arm": asdict(env.config.arm), "partner_arm": asdict(env.config.partner_arm),
         "softhand_version": __version__}
     summary["env_steps_per_s"] = summary["steps_per_s"] / frame_skip
     if as_json:
@@ -404,3 +416,19 @@ def _video_frames(env, controller: str, seed: int) -> list[np.ndarray]:
             frames.append(env.render())
         if terminated or truncated:
             return frames
+
+
+def _arms(hand: str, press_N: float | None, stiffness: float | None) -> dict:
+    """The env's arm arguments for ``--press`` and ``--arm-stiffness`` (their ranges are
+    softhand.hands.config.ARM_RANGES, checked by the options); {} for the defaults."""
+    from softhand.hands import ArmConfig
+
+    out = {}
+    sensored = {"press_n": press_N, "stiffness_n_per_m": stiffness}
+    sensored = {k: v for k, v in sensored.items() if v is not None}
+    if sensored:
+        out["sensored_arm"] = ArmConfig.of("relaxed" if hand == "human" else "prosthesis-user",
+                                           **sensored)
+    if press_N is not None:
+        out["partner_arm"] = ArmConfig.of("active", press_n=press_N)
+    return out
