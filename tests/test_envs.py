@@ -535,3 +535,16 @@ def test_info_names_an_overload_at_the_step_it_starts():
         if term or trunc:
             break
     assert named <= {f"{r} bone" for r in env.region_names} and named
+
+
+@pytest.mark.parametrize("seed, hand, bound", [(0, "prosthetic", 2.0), (1, "prosthetic", 2.0),
+                                               (0, "human", 3.0)])
+def test_no_indentation_is_counted_twice_at_a_seam(seed, hand, bound):
+    """Where one partner geom touches two skin geoms at points under 2 mm apart (the palm's
+    palmar/dorsal and proximal/distal seams, a crease at a knuckle), the smaller contact is an
+    indentation resisted twice: its share of the force between the hands, while they hold each
+    other. Measured: 0.8 % and 0.9 % (prosthetic, seeds 0 and 1), 2.1 % (human hand); 12-15 %
+    and 2.3 % before the hands rode arms (reports/load-path.md)."""
+    run = run_handshake(seed=seed, hand=hand)
+    share = run.double_count()["double_share_pct"]
+    assert 0.0 <= share < bound, share

@@ -205,6 +205,15 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                f"({over['deepest_pair'] or '-'}, t = {over['deepest_pair_time_s']:.2f} s); "
                f"bone on bone peak {over['bone_on_bone_peak_N']:.1f} N; a region over its "
                f"overload force or a bone bottoming out: {first}")
+    hold, twice = summary["hold"], summary["double_count"]
+    if hold:
+        pads = ("" if hold["qlv_decay_pct"] is None else
+                f"; {hold['pad_share_pct']:.0f} % of it through relaxation pads, whose QLV laws "
+                f"give {-hold['qlv_decay_pct']:+.1f} %")
+        click.echo(f"hold ({hold['hold_s']:.2f} s still): the force between the hands "
+                   f"{hold['force_start_N']:.1f} -> {hold['force_end_N']:.1f} N "
+                   f"({-hold['decay_pct']:+.1f} %){pads}; counted twice at skin seams while "
+                   f"the hands hold: {twice['double_share_pct']:.1f} %")
     click.echo(f"skin force no embedded sensor sees: {acc['unsensed_share_pct']:.1f} %; "
                f"contact time beyond a law's range: {acc['out_of_range_time_pct']:.1f} %")
     laws = ", ".join(f"{k} {v:.1f} %" for k, v in sorted(acc["by_law_share_pct"].items(),

@@ -84,6 +84,20 @@ class HandshakeRun:
     pair_depth_pair: list[str] = field(default_factory=list)
     #: the episode's first overload (the env's beyond_range_summary: time s and what, N)
     first_overload: dict = field(default_factory=dict)
+    #: per frame: the force resisted twice at a skin seam (N, ContactAreas.double_N)
+    double_count_N: np.ndarray | None = None
+
+    def double_count(self) -> dict[str, float]:
+        """The force counted twice at skin seams (ContactAreas.double_N) while the hands hold
+        each other (grip, shake, hold): N s, and its share of the force between the hands (%)."""
+        if self.double_count_N is None or self.palm_force_N is None:
+            return {"double_Ns": 0.0, "double_share_pct": 0.0}
+        hold = np.array([p in HOLDING for p in self.phase])
+        dt = float(np.median(np.diff(self.time_s))) if len(self.time_s) > 1 else 0.0
+        double = float(self.double_count_N[hold].sum() * dt)
+        total = float(self.palm_force_N[hold, 1].sum() * dt)
+        return {"double_Ns": double,
+                "double_share_pct": 100.0 * double / total if total > 0 else 0.0}
 
     def overload(self) -> dict:
         """Where the episode overloaded: the deepest pair (mm, its geoms, when), the bone-on-bone
@@ -351,6 +365,7 @@ class HandshakeRun:
                 "force_accounting": self.force_accounting(),
                 "overload": self.overload(),
                 "hold": self.hold_relaxation(),
+                "double_count": self.double_count(),
                 "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s,
                 "realtime_factor": self.steps * float(self.model.opt.timestep) / self.wall_s,
@@ -372,6 +387,11 @@ class HandshakeRun:
 
 #: The palm's surface pieces of each hand, thenar included (the thenar eminence is palm).
 PALM_PIECES = {"prosthetic": ("Palm1", "Palm2", "Thenar"), "partner": ("palm", "thumb_metacarpal")}
+
+
+#: Two contacts of one geom on two skin geoms closer than this (m) press one indentation: a seam
+#: between two skin pieces (the palm's palmar/dorsal and proximal/distal cuts, a joint's crease)
+SEAM_M = 0.002
 
 
 def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray) -> tuple[float, float]:
@@ -460,6 +480,10 @@ class ContactAreas:
         #: after each call: the deepest penetration (m) of a law-carrying pair between the hands
         #: and its two geoms (0, -1, -1: none touching)
         self.deepest: tuple[float, int, int] = (0.0, -1, -1)
+        #: after each call: the normal force (N) resisted twice at a seam: where one geom of the
+        #: other hand touches two skin geoms at points under SEAM_M apart, the smaller of the two
+        #: contacts' forces (one indentation carried by two laws)
+        self.double_N = 0.0
         self._force = np.zeros(6)
 
     def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float, np.ndarray]:
@@ -472,6 +496,7 @@ class ContactAreas:
         acc[:] = 0.0
         self.skin_force[:] = 0.0
         deepest = (0.0, -1, -1)
+        seam: dict[int, list[tuple[int, np.ndarray, float]]] = {}  # other geom -> skin contacts
         n = len(ACCOUNT_CLASSES)
         for i in range(data.ncon):
             c = data.contact[i]
@@ -485,6 +510,9 @@ class ContactAreas:
                 law = self.laws.get((min(g1, g2), max(g1, g2)))
                 if law is not None and -c.dist > deepest[0]:
                     deepest = (float(-c.dist), min(g1, g2), max(g1, g2))
+                if law is not None:
+                    skin, other = (g1, g2) if self.hand[g1] == 0 else (g2, g1)
+                    seam.setdefault(other, []).append((skin, c.pos.copy(), f))
                 if law is not None and len(law) > 2:
                     acc[n + 3 + law[2]] += f
                 if law is not None and law[0] == 0 and max(self.pad_joint[g1],
@@ -516,6 +544,14 @@ class ContactAreas:
                 if r >= 0 and depth > 0 and self._in_zone(data, r, c.pos):
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         self.deepest = deepest
+        double = 0.0
+        for touches in seam.values():
+            for a in range(len(touches)):
+                for b in range(a + 1, len(touches)):
+                    (sa, pa, fa), (sb, pb, fb) = touches[a], touches[b]
+                    if sa != sb and float(np.linalg.norm(pa - pb)) < SEAM_M:
+                        double += min(fa, fb)
+        self.double_N = double
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
 
     def _pad_share(self, data: mujoco.MjData, c) -> float:
@@ -636,7 +672,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
              for prefix, pieces in (("pro_skin_", PALM_PIECES["prosthetic"]),
                                     ("hum_tissue_", PALM_PIECES["partner"]))]
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
-                                                "acc", "sf", "pf", "s", "g", "pp", "dp", "dn")}
+                                                "acc", "sf", "pf", "s", "g", "pp", "dp", "dn", "dc")}
     geom_name = [m.geom(g).name for g in range(m.ngeom)]
     pad_joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{g}_pad")
                   for g in base.region_geoms]
@@ -670,6 +706,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
             frames["acc"].append(areas.accounting.copy())
             depth, g1, g2 = areas.deepest
             frames["dp"].append(1e3 * depth)
+            frames["dc"].append(areas.double_N)
             frames["dn"].append(f"{geom_name[g1]}/{geom_name[g2]}" if g1 >= 0 else "")
             if has_pads:  # the pads' force at this frame's state (mj_step leaves the forces
                 # of the state it started from), so that compression and force go together
@@ -706,4 +743,5 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
                          "seed": seed, "options": dict(options or {}),
                          "softhand_version": __version__},
                         tuple(law_labels(base)), base.contact_laws, first,
-                        np.array(frames["dp"]), frames["dn"], first_overload)
+                        np.array(frames["dp"]), frames["dn"], first_overload,
+                        np.array(frames["dc"]))
