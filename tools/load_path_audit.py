@@ -177,6 +177,22 @@ def overload_cases() -> list[dict]:
             for name, run in cases]
 
 
+def corner_cases() -> list[dict]:
+    """Bone on bone and the deepest pair at the four +-2.5 SD corners of the paper's subjects,
+    both sensored hands (neutral, seed 0)."""
+    from softhand.envs.partner import partner_size_range
+    from softhand.envs.run import run_handshake
+
+    r = partner_size_range()
+    (l0, l1), (w0, w1) = r["length"], r["width"]
+    out = []
+    for hand in ("prosthetic", "human"):
+        for size in ((l0, w0), (l0, w1), (l1, w0), (l1, w1)):
+            run = run_handshake(partner_size=size, hand=hand, seed=0)
+            out.append({"hand": hand, "partner_mm": list(size), **run.overload()})
+    return out
+
+
 def write_report(out: str, before: str | None) -> None:
     """``out``.md and ``out``.json: the table for this checkout and (``before``: the path of
     another checkout, run through PYTHONPATH) for that one, the hold, the overload cases and
@@ -215,6 +231,7 @@ def write_report(out: str, before: str | None) -> None:
                                   "step_us_runs": costs["before"], "checkout": before}
     data["hold"] = hold_cases()
     data["overload"] = overload_cases()
+    data["corners"] = corner_cases()
     with open(out + ".json", "w") as fh:
         json.dump(data, fh, indent=1)
     lines = ["# The handshake's load path", "",
@@ -255,6 +272,13 @@ def write_report(out: str, before: str | None) -> None:
                      f"({o['deepest_pair']}, {o['deepest_pair_time_s']:.2f} s) | "
                      f"{o['bone_on_bone_peak_N']:.1f} ({o['bone_on_bone_peak_time_s']:.2f} s) | "
                      f"{first} |")
+    lines += ["", "## The corners", "", "The four +-2.5 SD corners of the paper's subjects "
+              "(partner length x width), neutral, seed 0:", "",
+              "| sensored hand | partner mm | bone on bone peak N | deepest pair mm |",
+              "|---|---|---|---|"]
+    for c in data["corners"]:
+        lines.append(f"| {c['hand']} | {c['partner_mm'][0]:.0f} x {c['partner_mm'][1]:.0f} | "
+                     f"{c['bone_on_bone_peak_N']:.2f} | {c['deepest_pair_mm']:.1f} |")
     with open(out + ".md", "w") as fh:
         fh.write("\n".join(lines) + "\n")
 
