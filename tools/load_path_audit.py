@@ -177,6 +177,51 @@ def overload_cases() -> list[dict]:
             for name, run in cases]
 
 
+def who_loads(hand: str = "prosthetic", seed: int = 0) -> dict:
+    """For each of the paper's regions: the partner geom that pressed its skin geom most (N s,
+    over the whole episode, all of the skin geom's contacts, its sensor zone or not), its share
+    of the region's skin force, and the phase and time of the region's peak (its reading)."""
+    import gymnasium as gym
+
+    import softhand.envs  # noqa: F401
+    from softhand.envs.controllers import make_controller
+
+    env = gym.make("softhand/Handshake-v0", hand=hand).unwrapped
+    m, d = env.model, env.data
+    region_of = {m.geom(f"pro_skin_{r}").id: r for r in env.region_names}
+    by = {r: {} for r in env.region_names}
+    peak = dict.fromkeys(env.region_names, (0.0, 0.0, ""))
+    policy = make_controller("neutral")
+    obs, info = env.reset(seed=seed)
+    dt = env.frame_skip * float(m.opt.timestep)
+    while True:
+        obs, _, term, trunc, info = env.step(policy(obs, info))
+        for i in range(d.ncon):
+            c = d.contact[i]
+            if c.efc_address < 0:
+                continue
+            g1, g2 = int(c.geom[0]), int(c.geom[1])
+            skin, other = (g1, g2) if g1 in region_of else (g2, g1)
+            if skin not in region_of or not m.geom(other).name.startswith("hum_"):
+                continue
+            name = m.geom(other).name.removeprefix("hum_tissue_")
+            acc = by[region_of[skin]]
+            acc[name] = acc.get(name, 0.0) + float(d.efc_force[c.efc_address]) * dt
+        for r, f in info["region_forces_N"].items():
+            if f > peak[r][0]:
+                peak[r] = (f, float(info["time_s"]), info["phase"])
+        if term or trunc:
+            break
+    out = {}
+    for r in env.region_names:
+        total = sum(by[r].values())
+        top = max(by[r].items(), key=lambda kv: kv[1]) if by[r] else ("-", 0.0)
+        out[r] = {"peak_N": peak[r][0], "peak_time_s": peak[r][1], "peak_phase": peak[r][2],
+                  "top_partner_geom": top[0],
+                  "top_share_pct": 100.0 * top[1] / total if total > 0 else 0.0}
+    return out
+
+
 def corner_cases() -> list[dict]:
     """Bone on bone and the deepest pair at the four +-2.5 SD corners of the paper's subjects,
     both sensored hands (neutral, seed 0)."""
@@ -232,6 +277,7 @@ def write_report(out: str, before: str | None) -> None:
     data["hold"] = hold_cases()
     data["overload"] = overload_cases()
     data["corners"] = corner_cases()
+    data["who_loads"] = {hand: who_loads(hand) for hand in ("prosthetic", "human")}
     with open(out + ".json", "w") as fh:
         json.dump(data, fh, indent=1)
     lines = ["# The handshake's load path", "",
@@ -279,6 +325,25 @@ def write_report(out: str, before: str | None) -> None:
     for c in data["corners"]:
         lines.append(f"| {c['hand']} | {c['partner_mm'][0]:.0f} x {c['partner_mm'][1]:.0f} | "
                      f"{c['bone_on_bone_peak_N']:.2f} | {c['deepest_pair_mm']:.1f} |")
+    from softhand.paper import paper
+
+    fig4 = set(paper()["handshake"]["over_2N"])
+    lines += ["", "## Who loads each region", "", "Seed 0, neutral: for each region, its peak "
+              "reading (N, when, in which phase) and the partner geom that pressed its skin "
+              "most over the episode, with its share of that skin's force (all of the skin "
+              "geom's contacts). Regions in the paper's Fig. 4 set marked.", "",
+              "| region | Fig. 4 > 2 N | prosthetic: peak N (t s, phase) | by | human hand: peak N "
+              "(t s, phase) | by |", "|---|---|---|---|---|---|"]
+    pro, hum = data["who_loads"]["prosthetic"], data["who_loads"]["human"]
+    for r in pro:
+        cells = []
+        for w in (pro[r], hum[r]):
+            if w["peak_N"] > 0.05:
+                cells += [f"{w['peak_N']:.2f} ({w['peak_time_s']:.2f}, {w['peak_phase']})",
+                          f"{w['top_partner_geom']} ({w['top_share_pct']:.0f} %)"]
+            else:
+                cells += ["-", "-"]
+        lines.append(f"| {r} | {'yes' if r in fig4 else ''} | " + " | ".join(cells) + " |")
     with open(out + ".md", "w") as fh:
         fh.write("\n".join(lines) + "\n")
 
