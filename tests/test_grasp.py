@@ -156,6 +156,7 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
     from softhand.hands import grasp as g
 
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", str(tmp_path))
+    real_solve_starts = g._solve_starts
     config = SceneConfig()
     solved = g.solve_grasp.__wrapped__(config)  # solves (an empty cache) and writes the entry
     entries = list((tmp_path / "grasps").glob("*.json"))
@@ -176,5 +177,16 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
         list(solved.iterations)))
     g.solve_grasp.__wrapped__(config)
     assert len(calls) == 1  # the corrupt entry was solved again
+    # finite but wrong numbers (its variables zeroed): their cost is not the entry's, so it is
+    # solved again and the entry rewritten, not used
+    import json
+
+    g._write_cached(entries[0], solved.cost, np.zeros_like(np.array(json.loads(
+        entries[0].read_text())["x"])), list(solved.iterations))
+    monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or real_solve_starts(*a))
+    again = g.solve_grasp.__wrapped__(config)
+    assert len(calls) == 2
+    assert np.array_equal(again.partner_q, solved.partner_q)
+    assert json.loads(entries[0].read_text())["x"] != [0.0] * len(again.partner_q)
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
     assert g._cache_path(config, GRASP_SETTINGS) is None

@@ -631,6 +631,8 @@ def solve_grasp(config: SceneConfig | None = None,
     problem = _Problem(config, settings)
     path = _cache_path(config, settings)
     known = _read_cached(path, problem.n)
+    if known is not None and not _cached_cost_holds(problem, *known[:2]):
+        known = None  # an entry whose variables do not give its cost: solved again, rewritten
     if known is not None:
         cost, x, iterations = known
     else:
@@ -703,6 +705,13 @@ def _read_cached(path: Path | None, n: int) -> tuple[float, np.ndarray, list[int
         return float(entry["cost"]), x, [int(i) for i in entry["iterations"]]
     except (OSError, ValueError, KeyError, TypeError):
         return None
+
+
+def _cached_cost_holds(problem: _Problem, cost: float, x: np.ndarray) -> bool:
+    """Whether a cached solution's variables give its recorded cost (one residual, a few ms):
+    an entry edited or damaged into other finite numbers is not used."""
+    got = 0.5 * float(np.sum(problem.residual(x, contacts=True) ** 2))
+    return bool(np.isfinite(cost)) and abs(got - cost) <= 1e-9 + 1e-6 * abs(cost)
 
 
 def _write_cached(path: Path | None, cost: float, x: np.ndarray, iterations: list[int]) -> None:
