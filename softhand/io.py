@@ -111,6 +111,10 @@ def check_writable_dir(path: str | os.PathLike, *, name: str = "path",
     return target
 
 
+#: bytes the temporary file of `atomic_open` adds to a file's name: "." + "." + 8 + ".tmp"
+_TEMP_NAME_EXTRA = 14
+
+
 def check_writable_file(path: str | os.PathLike, *, suffix: str | None = None,
                         name: str = "path") -> Path:
     """``path`` as a file that can be written: right suffix, not a folder, writable folder.
@@ -126,6 +130,17 @@ def check_writable_file(path: str | os.PathLike, *, suffix: str | None = None,
     target = Path(text)
     if suffix is not None and target.suffix != suffix:
         raise ValueError(f"{name} = {text!r}: expected a file name ending in {suffix}")
+    # atomic writes go through a temporary ".{name}.XXXXXXXX.tmp" beside it (`atomic_open`)
+    base = _nearest_existing(Path(os.path.abspath(target.parent if str(target.parent) else ".")))
+    try:
+        name_max = os.pathconf(base if base.is_dir() else base.parent, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        name_max = 255
+    limit = name_max - _TEMP_NAME_EXTRA
+    if len(target.name.encode()) > limit:
+        raise ValueError(f"{name} = {text!r}: the file name is {len(target.name.encode())} bytes "
+                         f"long; allowed at most {limit} (the file system's {name_max} less "
+                         f"{_TEMP_NAME_EXTRA} for the temporary name it is written through)")
     if target.is_dir():
         raise ValueError(f"{name} = {text!r} is a folder, not a file")
     if target.exists() and not target.is_file():

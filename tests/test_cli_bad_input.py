@@ -287,3 +287,14 @@ def test_a_solver_that_is_not_installed_is_refused_naming_the_flag(monkeypatch):
     for command in (["fe", "indent", "solid-pu"], ["fe", "sweep", "--design", "solid-pu"]):
         rejected([*command, *FAST, "--solver", "pardiso"], "--solver pardiso",
                  "MKL PARDISO is not installed", "softhand[mkl]", "allowed here: auto, cholmod")
+
+
+@pytest.mark.parametrize("args", [["handshake", "--record", "{long}.rrd"],
+                                  ["fe", "export", "pocket2-sil", "{long}.inp"]])
+def test_a_file_name_too_long_for_the_disk_is_one_line_before_any_work(tmp_path, args):
+    """A 300-byte file name (longer than the file system takes, with the temporary name the file
+    is written through) is refused with the flag, the length and the limit: no OSError."""
+    long = str(tmp_path / ("a" * 300))
+    line = rejected([a.format(long=long) for a in args], "the file name is 304 bytes long",
+                    "allowed at most 241")
+    assert not any(tmp_path.iterdir()), line
