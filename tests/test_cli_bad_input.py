@@ -298,3 +298,10 @@ def test_a_file_name_too_long_for_the_disk_is_one_line_before_any_work(tmp_path,
     line = rejected([a.format(long=long) for a in args], "the file name is 304 bytes long",
                     "allowed at most 241")
     assert not any(tmp_path.iterdir()), line
+
+
+def test_fe_indent_sensor_on_the_palm_is_one_line():
+    """Embedded sensors are read on the phalanx only: --sensor with --body palm is refused by
+    the command line itself (it took the internal-error path)."""
+    rejected(["fe", "indent", "pocket2-sil", "--body", "palm", "--sensor", "interface"],
+             "--sensor with --body palm", "phalanx only")

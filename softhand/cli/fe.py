@@ -56,6 +56,9 @@ def fe_indent(design, sensor_items, out_dir, force, as_json, **kw) -> None:
     (name,) = designs_of([design])
     settings = make_settings([name], **kw)
     sensors = parse_sensors(sensor_items, name, settings.geometry)
+    if sensors and settings.body != "phalanx":
+        bad(f"--sensor with --body {settings.body}: embedded sensors are read on the phalanx "
+            "only (--body phalanx, the default)")
     if sensors and parse_indenter(settings.indenter).full_model:
         bad(f"--sensor with --indenter {settings.indenter!r}: embedded sensors are read on the "
             "quarter model only (cylinder angles 0 and 90, sphere, plate); this angle runs the "
