@@ -17,7 +17,11 @@ over the phases where the hands hold each other (grip, shake and hold):
 Usage: ``python tools/load_path_audit.py [--seed 0] [--hand prosthetic|human]
 [--representation soft-contact+relaxation] [--json OUT]``; ``--table`` runs seeds 0-4 and the
 human hand and prints one row each; ``--report reports/load-path [--before CHECKOUT]`` writes
-the report (both checkouts' tables and mj_step costs, the hold, the overload cases).
+the report (both checkouts' tables and mj_step costs, the hold, the overload cases, the corners,
+who loads each region). The report's "before" is 256a176, the commit before the arms, made with
+``git worktree add /tmp/old 256a176 && ln -s ../calibration /tmp/old/softhand/calibration``
+(the symlink makes ``softhand.calibration`` that checkout's own when it runs through PYTHONPATH
+beside an editable install of this one).
 """
 
 from __future__ import annotations
