@@ -33,6 +33,9 @@ import sys
 import mujoco
 import numpy as np
 
+#: the seam distance of softhand.envs.run.SEAM_M. The audit measures with its own loop, not with
+#: softhand's ContactAreas (double_N, deepest), because it also runs on the checkout before the
+#: arms (--before), which has neither; the two agree on this checkout (0.8 % at seed 0 both ways)
 SEAM_MM = 2.0
 HELD = ("grip", "shake", "hold")
 

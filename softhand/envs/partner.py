@@ -315,7 +315,7 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
         phase = phase_at(ends[w], t[w])
         if phase == 1 or phase == 2 or phase == 3:  # HOLDING
             s = _min_jerk((t[w] - ends[w, 0]) / CLOSE_S)
-            if phase != 3:  # the hold keeps the effort of the shake's end (HOLD_KEEPS_EFFORT)
+            if phase != 3 or not HOLD_KEEPS_EFFORT:  # the hold keeps the shake's last effort
                 target = grip_N[w]
                 error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
                 # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the

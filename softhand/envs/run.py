@@ -105,14 +105,13 @@ class HandshakeRun:
         ``info["overload_started"]``: a region over the scenario's overload_N, or a bone
         bottoming out under a region)."""
         depth = self.pair_depth_mm if self.pair_depth_mm is not None else np.zeros(1)
-        k = int(np.argmax(depth)) if depth.size else 0
         rigid = self.rigid_force_N if self.rigid_force_N is not None else np.zeros(1)
-        j = int(np.argmax(rigid)) if rigid.size else 0
-        return {"deepest_pair_mm": float(depth[k]) if depth.size else 0.0,
+        k, j = int(np.argmax(depth)), int(np.argmax(rigid))
+        return {"deepest_pair_mm": float(depth[k]),
                 "deepest_pair": self.pair_depth_pair[k] if self.pair_depth_pair else "",
-                "deepest_pair_time_s": float(self.time_s[k]) if depth.size else 0.0,
-                "bone_on_bone_peak_N": float(rigid[j]) if rigid.size else 0.0,
-                "bone_on_bone_peak_time_s": float(self.time_s[j]) if rigid.size else 0.0,
+                "deepest_pair_time_s": float(self.time_s[k]),
+                "bone_on_bone_peak_N": float(rigid[j]),
+                "bone_on_bone_peak_time_s": float(self.time_s[j]),
                 "first_overload_time_s": self.first_overload.get("time_s"),
                 "first_overload": self.first_overload.get("what")}
 
@@ -296,9 +295,10 @@ class HandshakeRun:
         skins' QLV laws give for the pads' own compression histories, weighted by the force each
         pad carries (``qlv_decay_pct``: sum over the pads of F_QLV(t, x(t)) at the end against
         the start), and the share of the hold's force between the hands that went through a
-        pad's spring (``pad_share_pct``; the rest meets the tissue's law alone). The partner
-        regulates its grip force in the hold (softhand.envs.partner), so the hand-level force
-        is held, not the indentation: the skins creep rather than the force falling.
+        pad's spring (``pad_share_pct``; the rest meets the tissue's law alone). In the hold the
+        partner keeps its grip effort instead of regulating the force
+        (softhand.envs.partner.HOLD_KEEPS_EFFORT), so a skin's relaxation can show as a fall of
+        the force; the hands still settle after the shake, so the indentation is not constant.
         Empty without a hold."""
         hold = np.array([p == "hold" for p in self.phase])
         if not hold.any() or self.palm_force_N is None:
