@@ -5,6 +5,7 @@ are checked, and the commands run on stand-in results."""
 
 from __future__ import annotations
 
+import os
 import shutil
 from types import SimpleNamespace
 
@@ -200,3 +201,17 @@ def test_render_starts_with_a_header(monkeypatch, tmp_path, args, header):
     assert first == f"softhand {__version__} render | {header}"
     assert len(rest) == 1 and rest[0].startswith(f"wrote {tmp_path / 'x.png'}")
 
+
+
+def test_the_command_line_imports_no_mujoco_before_render_chooses_its_gl():
+    """``softhand render`` sets MUJOCO_GL before mujoco is first imported (MuJoCo reads it then):
+    importing the command line must not import mujoco, or the render fails deep inside
+    (an OpenGL FatalError) when MUJOCO_GL was not set by the user."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    out = subprocess.run([sys.executable, "-c", "import sys, softhand.cli; "
+                          "print('mujoco' in sys.modules)"], env=env, capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.strip() == "False", out.stdout

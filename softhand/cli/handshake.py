@@ -22,7 +22,6 @@ from softhand.cli.inputs import (
     sensor_spec_of,
     with_options,
 )
-from softhand.hands.config import ARM_RANGES
 
 _OPT_CONTACT_LAWS = click.option(
     "--contact-laws", type=click.Choice(["geometry", "plate"]), default="geometry",
@@ -36,6 +35,23 @@ _OPT_HAND = click.option(
     "--hand", type=click.Choice(["prosthetic", "human"]), default="prosthetic", show_default=True,
     help="The sensored hand: the prosthetic hand, or the paper's relaxed human hand (its protocol).")
 
+
+
+class _ArmNumber(Number):
+    """A `Number` in the range of softhand.hands.config.ARM_RANGES[key], read when a value is
+    given: importing softhand.hands here would import mujoco with the command line, before
+    ``softhand render`` sets MUJOCO_GL (`_check_gl`)."""
+
+    def __init__(self, key: str, unit: str) -> None:
+        super().__init__(unit=unit)
+        self.key = key
+
+    def convert(self, value, param, ctx):
+        if self.lo is None:
+            from softhand.hands.config import ARM_RANGES
+
+            self.lo, self.hi = ARM_RANGES[self.key]
+        return super().convert(value, param, ctx)
 
 @main.command("handshake")
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
@@ -72,11 +88,11 @@ _OPT_HAND = click.option(
                    "[default: 190,88, the experimenter].")
 @_OPT_HAND
 @_OPT_CONTACT_LAWS
-@click.option("--press", "press_N", type=Number(*ARM_RANGES["press_n"], unit="N"), default=None,
+@click.option("--press", "press_N", type=_ArmNumber("press_n", "N"), default=None,
               help="Each arm's push of its palm towards the other's, 0-10 N [default: 2 N, and 0 "
                    "for the relaxed experimenter of --hand human].")
 @click.option("--arm-stiffness", "arm_stiffness", default=None,
-              type=Number(*ARM_RANGES["stiffness_n_per_m"], unit="N/m"),
+              type=_ArmNumber("stiffness_n_per_m", "N/m"),
               help="The sensored hand's arm: its endpoint stiffness, 20-5000 N/m [default: 1000, "
                    "the prosthesis user's; 150 for --hand human, the relaxed experimenter's].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
@@ -409,7 +425,7 @@ def _video_frames(env, controller: str, seed: int) -> list[np.ndarray]:
     from softhand.envs.physics import DivergenceError
 
     policy = make_controller(controller)
-    every = max(1, round(1.0 / (VIDEO_FPS * env._action_period_s)))
+    every = max(1, round(1.0 / (VIDEO_FPS * env.frame_skip * float(env.model.opt.timestep))))
     obs, info = env.reset(seed=seed)
     frames, k = [env.render()], 0
     while True:
