@@ -81,11 +81,12 @@ def test_handshake_open_loop_example(capsys):
 def test_handshake_sensors_example(capsys):
     """Fed the pocket floor's sensors, the neutral controller's index and middle fingers press
     harder than on the true forces: they feel the partner only once the pocket has closed and
-    the reading passed the sensor's threshold (measured, pocket2-sil, seed 0: 0.79 / 0.78 N
-    during the shake against 0.35 / 0.41 N); the sensor on Palm1 reads 2.17 N."""
+    the reading passed the sensor's threshold (measured, pocket2-sil, seed 0, the palm one
+    surface: 0.40 / 0.15 N during the shake against 0.17 / 0.13 N; 0.79 / 0.78 against
+    0.35 / 0.41 N when the palm was four skins); the sensor on Palm1 reads over 1 N."""
     out = _load("handshake_sensors").main()
     contact, floor = out["contact"], out["sensor on the pocket floor"]
-    assert floor["Index"] + floor["Middle"] > contact["Index"] + contact["Middle"] + 0.3
+    assert floor["Index"] + floor["Middle"] > contact["Index"] + contact["Middle"] + 0.2
     assert out["sensor under the outer layer"]["Palm1 reading"] > 1.0
     text = capsys.readouterr().out
     assert text.startswith("3 handshakes") and "force held during the shake" in text

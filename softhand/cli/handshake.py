@@ -56,8 +56,9 @@ class _ArmNumber(Number):
 @main.command("handshake")
 @click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
 @click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN[@REPRESENTATION]",
-              help="Skin of one region (repeatable), e.g. Palm1=rigid or "
-                   "Palm2=pocket2-pu@soft-contact+relaxation.")
+              help="Skin of one region (repeatable), e.g. Index2=rigid or "
+                   "Index2=pocket2-pu@soft-contact+relaxation; Palm=DESIGN for the palm's one "
+                   "surface (Palm1, Palm2, Back1 and Back2 are its zones and wear one skin).")
 @click.option("--representation", default=None,
               help="Representation of every region: soft-contact (default), "
                    "soft-contact+relaxation (relaxation pads) or rigid.")
@@ -410,8 +411,9 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
 
 def _skin_forces(run, k: int) -> dict[str, float]:
     """Each region's skin geom and its force (N) at frame ``k`` of a HandshakeRun."""
-    return {f"pro_skin_{r}": float(run.region_force_N[k, i])
-            for i, r in enumerate(run.region_names)}
+    from softhand.envs.picture import skin_forces  # the CLI imports no mujoco at its top
+
+    return skin_forces(run.model, run.region_names, run.region_force_N[k])
 
 
 #: Frames per second of simulated time in `softhand render --video` (every 8th env step of 10 ms)

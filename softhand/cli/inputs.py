@@ -399,7 +399,7 @@ def parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
         region, sep, design = item.partition("=")
         if not sep or not region.strip() or not design.strip():
             bad(f"--skin {item!r}: expected REGION=DESIGN[@REPRESENTATION] (e.g. "
-                "Palm1=pocket2-pu@soft-contact+relaxation)")
+                "Index2=pocket2-pu@soft-contact+relaxation)")
         out[region.strip()] = design.strip()
     return out
 

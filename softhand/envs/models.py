@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import mujoco
 
-from softhand.envs.skins import parse_skins, write_skin_laws
+from softhand.envs.skins import palm_skin, parse_skins, write_skin_laws
 from softhand.hands import SceneConfig, scene_spec
 from softhand.hands.mjcf import mjcf_text, write_mjcf
 from softhand.io import atomic_write_text
@@ -34,11 +35,17 @@ def skinned_scene_spec(skins: Mapping[str, str] | None = None, config: SceneConf
                        directory: str | os.PathLike = SKINS_DIR,
                        contact_laws: str = "geometry") -> mujoco.MjSpec:
     """The handshake scene with every skin, pair and law (default skins and representations:
-    `parse_skins`; ``contact_laws``: `softhand.envs.skins.CONTACT_LAWS`)."""
-    spec = scene_spec(config or SceneConfig())
+    `parse_skins`; ``contact_laws``: `softhand.envs.skins.CONTACT_LAWS`). The palm's skin is
+    one surface, or its quarters where the palm's zones ride relaxation pads (`palm_skin`,
+    whatever ``config.prosthetic.palm`` says)."""
     if skins is None:
         skins, default_reps = parse_skins()
         representations = representations or default_reps
+    config = config or SceneConfig()
+    palm = palm_skin(representations or {})  # the palm in quarters under relaxation pads
+    if config.prosthetic.palm != palm:
+        config = replace(config, prosthetic=replace(config.prosthetic, palm=palm))
+    spec = scene_spec(config)
     write_skin_laws(spec, skins, representations, directory=directory,
                     contact_laws=contact_laws)
     return spec

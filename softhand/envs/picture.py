@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from softhand.hands.prosthetic import regions
 from softhand.laws.fit import REFERENCE_FORCE_N
 
 __all__ = ["BACKGROUND", "CONTACT_COLOUR", "HAND_COLOURS", "RENDER_VIEW", "STANDOUT_FORCE_N",
@@ -201,6 +202,17 @@ def force_colors(
     )
     alpha = np.full(f.shape + (1,), 255.0)
     return np.round(np.concatenate([rgb, alpha], axis=-1)).astype(np.uint8)
+
+
+def skin_forces(model: mujoco.MjModel, region_names, forces) -> dict[str, float]:
+    """Skin geom name -> force (N) for `region_colours`, from each region's force: a skin that
+    carries several regions as zones (the palm's surface) shows its largest."""
+    info = regions(model) if len(region_names) else {}
+    out: dict[str, float] = {}
+    for region, f in zip(region_names, forces, strict=True):
+        name = info[region].geom
+        out[name] = max(out.get(name, float("-inf")), float(f))
+    return out
 
 
 def region_colours(model: mujoco.MjModel, region_force_N: dict[str, float]

@@ -385,8 +385,13 @@ class HandshakeRun:
         return out
 
 
-#: The palm's surface pieces of each hand, thenar included (the thenar eminence is palm).
-PALM_PIECES = {"prosthetic": ("Palm1", "Palm2", "Thenar"), "partner": ("palm", "thumb_metacarpal")}
+#: The palm's surface pieces of each hand, thenar included (the thenar eminence is palm); the
+#: prosthetic palm's one surface counts on its palmar face only (PALM_FACE_ZONES), in quarters
+#: its palmar ones (the pieces a hand lacks are left out).
+PALM_PIECES = {"prosthetic": ("Palm", "Palm1", "Palm2", "Thenar"),
+               "partner": ("palm", "thumb_metacarpal")}
+#: The zones of the prosthetic palm's surface that face the other palm.
+PALM_FACE_ZONES = ("Palm1", "Palm2")
 
 
 #: Two contacts of one geom on two skin geoms closer than this (m) press one indentation: a seam
@@ -394,9 +399,12 @@ PALM_PIECES = {"prosthetic": ("Palm1", "Palm2", "Thenar"), "partner": ("palm", "
 SEAM_M = 0.002
 
 
-def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray) -> tuple[float, float]:
+def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray,
+                  palmar: Callable[[int, np.ndarray], bool] | None = None) -> tuple[float, float]:
     """Normal force (N) between the two hands' palm pieces, and between the hands in all;
-    ``pro``, ``hum``: per geom, whether it is a palm piece of that hand (masks over the geoms)."""
+    ``pro``, ``hum``: per geom, whether it is a palm piece of that hand (masks over the geoms);
+    ``palmar(geom, point)``: whether a contact at ``point`` on a prosthetic palm piece lies on
+    its palmar face (default: all of it)."""
     con = d.contact
     adr = con.efc_address
     live = adr >= 0
@@ -404,6 +412,11 @@ def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray) -> tuple[f
         return 0.0, 0.0
     g, f = con.geom[live], d.efc_force[adr[live]]
     palm = (pro[g[:, 0]] & hum[g[:, 1]]) | (pro[g[:, 1]] & hum[g[:, 0]])
+    if palmar is not None:
+        pos = con.pos[live]
+        for i in np.flatnonzero(palm):
+            own = g[i, 0] if pro[g[i, 0]] else g[i, 1]
+            palm[i] = palmar(int(own), pos[i])
     return float(f[palm].sum()), float(f.sum())
 
 
@@ -463,8 +476,14 @@ class ContactAreas:
         #: skin-law force (N) in contacts beyond it, then the force (N) of the pair contacts
         #: per law they carry (the third entry of each ``laws`` value)
         self.accounting = np.zeros(len(ACCOUNT_CLASSES) + 3 + n_laws)
+        #: per geom, the region its skin carries (-1: none; -2: several, as zones of one
+        #: surface, the palm's: a contact there belongs to the zone nearest to it, `region_at`)
         self.region_of = -np.ones(model.ngeom, dtype=int)
-        self.region_of[np.asarray(region_geoms)] = np.arange(len(region_geoms))
+        self.zones_of: dict[int, list[int]] = {}
+        for r, g in enumerate(region_geoms):
+            self.zones_of.setdefault(int(g), []).append(r)
+        for g, rs in self.zones_of.items():
+            self.region_of[g] = rs[0] if len(rs) == 1 else -2
         self.radius = np.array([mean_curvature_radius(model, g) for g in range(model.ngeom)])
         self.bone = np.array(["bone_" in (model.geom(g).name or "") for g in range(model.ngeom)])
         #: per geom, the slide joint of its relaxation pad (-1: none): only the part of a contact
@@ -535,12 +554,12 @@ class ContactAreas:
             if self.bone[g1] and self.bone[g2]:
                 rigid += f
                 continue
-            for g in (g1, g2):
-                if self.region_of[g] >= 0:
-                    self.skin_force[self.region_of[g]] += f
+            owners = [(g, self.region_at(data, g, c.pos)) for g in (g1, g2)]
+            for _, r in owners:
+                if r >= 0:
+                    self.skin_force[r] += f
             depth = -c.dist
-            for g in (g1, g2):
-                r = self.region_of[g]
+            for _, r in owners:
                 if r >= 0 and depth > 0 and self._in_zone(data, r, c.pos):
                     area[r] += sphere_overlap_area(self.radius[g1], self.radius[g2], depth) * 1e6
         self.deepest = deepest
@@ -566,11 +585,30 @@ class ContactAreas:
         site = self.zones[region]
         return True if site is None else _box_contains(data, self.model, site, point)
 
+    def region_at(self, data: mujoco.MjData, geom: int, point) -> int:
+        """The region (index) whose skin a contact at ``point`` (world) on ``geom`` presses: the
+        geom's own, or on a surface of several zones the zone whose box is nearest (each contact
+        belongs to exactly one region: inside a zone, that one; on an unsensed border, the
+        nearest); -1 for a geom that carries none."""
+        r = int(self.region_of[geom])
+        if r != -2:
+            return r
+        if any(self.zones[z] is None for z in self.zones_of[geom]):
+            raise ValueError(f"geom {self.model.geom(geom).name!r} carries several regions: "
+                             "ContactAreas needs their zones to tell them apart")
+        return min(self.zones_of[geom],
+                   key=lambda z: _box_distance(data, self.model, self.zones[z], point))
+
 
 def _box_contains(data: mujoco.MjData, model: mujoco.MjModel, site: int, point) -> bool:
     """Whether ``point`` (world) lies inside the box site ``site``."""
+    return _box_distance(data, model, site, point) <= 1e-12
+
+
+def _box_distance(data: mujoco.MjData, model: mujoco.MjModel, site: int, point) -> float:
+    """Distance (m) from ``point`` (world) to the box site ``site`` (0 inside)."""
     local = data.site_xmat[site].reshape(3, 3).T @ (np.asarray(point) - data.site_xpos[site])
-    return bool(np.all(np.abs(local) <= model.site_size[site] + 1e-12))
+    return float(np.linalg.norm(np.maximum(np.abs(local) - model.site_size[site], 0.0)))
 
 
 def pair_laws(env: HandshakeEnv) -> dict[tuple[int, int], tuple[int, float, int]]:
@@ -668,9 +706,14 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
     m, d = base.model, base.data
     zones = [m.site(f"pro_touch_{r}").id for r in base.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in base.region_geoms], pair_laws(base), zones)
-    palms = [np.isin(np.arange(m.ngeom), [m.geom(f"{prefix}{p}").id for p in pieces])
+    palms = [np.isin(np.arange(m.ngeom), [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM,
+                                                            f"{prefix}{p}") for p in pieces])
              for prefix, pieces in (("pro_skin_", PALM_PIECES["prosthetic"]),
                                     ("hum_tissue_", PALM_PIECES["partner"]))]
+    face = [base.region_names.index(z) for z in PALM_FACE_ZONES]
+
+    def palmar(geom: int, point: np.ndarray) -> bool:  # the palm's surface: its palmar zones
+        return areas.region_of[geom] != -2 or areas.region_at(d, geom, point) in face
     frames: dict[str, list] = {k: [] for k in ("t", "q", "mp", "mq", "f", "c", "ph", "a", "r",
                                                 "acc", "sf", "pf", "s", "g", "pp", "dp", "dn", "dc")}
     geom_name = [m.geom(g).name for g in range(m.ngeom)]
@@ -698,7 +741,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
             frames["s"].append([info["sensor_readings_N"][r] for r in base.region_names])
             frames["ph"].append(info["phase"])
             frames["g"].append((info["partner_grip_measured_N"], info["partner_grip_N"]))
-            frames["pp"].append(_palm_to_palm(d, *palms))
+            frames["pp"].append(_palm_to_palm(d, *palms, palmar))
             area, rigid, rows = areas(d)
             frames["c"].append(rows)
             frames["a"].append(area)

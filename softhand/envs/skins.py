@@ -7,10 +7,11 @@ indentation of the pair is the sum of the two at the same force), shipped as eac
 by the pair's inverse inertia (`softhand.skin.soft_contact`). A ``rigid`` region leaves only
 the tissue's compliance. Laws come from the shipped calibration files; no FE run, no refit.
 
-The prosthetic hand's skin covers its whole envelope (`softhand.hands.envelope`): besides the
-18 sensing regions, the non-sensing thenar skin (`softhand.hands.prosthetic.UNSENSED_SKINS`)
-wears the design of the region it belongs to, and has its pairs too. No bare shell meets the
-partner: every pair is a skin (or a ``rigid`` region) against tissue.
+The prosthetic hand's skin covers its whole envelope (`softhand.hands.envelope`): one geom per
+phalanx, one for the palm's continuous surface (Palm1, Palm2, Back1 and Back2 are its zones, so
+they wear one design) and the non-sensing thenar skin; each wears the design of the region of
+`softhand.hands.prosthetic.SKIN_KEYS` and has its pairs. No bare shell meets the partner: every
+pair is a skin (or a ``rigid`` region) against tissue.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import mujoco
 import numpy as np
 
 from softhand.hands import partner_tissue_geoms, regions
-from softhand.hands.prosthetic import UNSENSED_SKINS, paper_regions
+from softhand.hands.prosthetic import SKIN_KEYS, SURFACES, paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
 from softhand.skin.contact_classes import PLATE_CLASS, classify
@@ -39,11 +40,29 @@ from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams
 from softhand.validate import show
 
-__all__ = ["CONTACT_LAWS", "DEFAULT_DESIGN", "DEFAULT_REPRESENTATION", "HAND_REPRESENTATIONS",
-           "OUTWARD", "PAD_TESTED_MAX_TIMESTEP_S", "SKIN_CHOICES", "CalibratedRangeWarning",
-           "PairChoice", "add_skin_pairs", "calibrated_max_force", "check_contact_laws",
-           "check_pad_timestep", "pair_choices", "parse_skins", "series_law", "skin_of_pair",
-           "write_skin_laws"]
+__all__ = [
+    "CONTACT_LAWS",
+    "DEFAULT_DESIGN",
+    "DEFAULT_REPRESENTATION",
+    "HAND_REPRESENTATIONS",
+    "OUTWARD",
+    "PAD_TESTED_MAX_TIMESTEP_S",
+    "SKIN_CHOICES",
+    "CalibratedRangeWarning",
+    "PairChoice",
+    "add_skin_pairs",
+    "calibrated_max_force",
+    "check_contact_laws",
+    "check_pad_timestep",
+    "pair_choices",
+    "palm_skin",
+    "parse_skins",
+    "series_law",
+    "skin_keys",
+    "skin_of_pair",
+    "skin_representation",
+    "write_skin_laws",
+]
 
 class CalibratedRangeWarning(UserWarning):
     """Contacts between the hands carried more force than their pair laws were calibrated to (the
@@ -57,7 +76,8 @@ DEFAULT_REPRESENTATION = "soft-contact"
 #: the representations the handshake takes (flex needs its own scene: softhand.hands.flex_region)
 HAND_REPRESENTATIONS = tuple(n for n, r in REPRESENTATIONS.items() if r.not_on_hand is None)
 #: outward normal of each prosthetic skin geom's contact side in its body's frame: palmar (-z)
-#: for the phalanges, the palm and the thenar, dorsal (+z) for the back of the hand
+#: for the phalanges, the thenar and the palmar quarters, dorsal (+z) for the back's quarters
+#: (the palm's one surface has two faces: it takes no pad, see `skin_representation`)
 OUTWARD = {"Back1": (0.0, 0.0, 1.0), "Back2": (0.0, 0.0, 1.0)}
 PALMAR = (0.0, 0.0, -1.0)
 SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
@@ -67,7 +87,8 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
                 representation: str | None = None) -> tuple[dict[str, str], dict[str, str]]:
     """Region -> skin design and region -> representation: ``design`` (default the most
     lifelike) in ``representation`` (default ``soft-contact``) everywhere, then ``overrides``,
-    each ``DESIGN`` or ``DESIGN@REPRESENTATION``.
+    each ``DESIGN`` or ``DESIGN@REPRESENTATION``, keyed by region or by a surface's key
+    (``Palm``: its four zones at once; the zones of one surface must end with one skin).
 
     A ``rigid`` region (the design, or any design ``@rigid``) is MuJoCo's stock contact against
     the tissue: its design is ``rigid`` and its representation ``rigid``.
@@ -88,10 +109,14 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
     designs, reps = dict.fromkeys(names, design), dict.fromkeys(names, rep)
     if overrides is not None and not isinstance(overrides, Mapping):
         raise ValueError(f"skins = {overrides!r}: expected a mapping region -> DESIGN or "
-                         f"DESIGN@REPRESENTATION, e.g. {{'Palm1': 'rigid'}}")
-    for region, choice in (overrides or {}).items():
-        if region not in designs:
-            raise ValueError(f"region {region!r} is unknown; allowed: {', '.join(names)}")
+                         f"DESIGN@REPRESENTATION, e.g. {{'Index1': 'rigid'}}")
+    expanded: dict[str, object] = {}
+    for region, choice in (overrides or {}).items():  # a surface's key: each of its zones
+        if region not in designs and region not in SURFACES:
+            raise ValueError(f"region {region!r} is unknown; allowed: {', '.join(names)} "
+                             f"(or {', '.join(SURFACES)}: all of its zones)")
+        expanded.update(dict.fromkeys(SURFACES.get(region, (region,)), choice))
+    for region, choice in expanded.items():
         if not isinstance(choice, str):
             raise ValueError(f"skin {choice!r} for region {region}: expected DESIGN or "
                              f"DESIGN@REPRESENTATION (a string)")
@@ -108,7 +133,25 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
     for region in names:
         if designs[region] == "rigid" or reps[region] == "rigid":
             designs[region] = reps[region] = "rigid"
+    for key, zones in SURFACES.items():
+        worn = {(designs[z], reps[z]) for z in zones}
+        if len(worn) > 1:
+            said = ", ".join(f"{z}={designs[z]}@{reps[z]}" for z in zones)
+            raise ValueError(f"skins {said}: {', '.join(zones)} are zones of one {key.lower()} "
+                             "skin and wear one design and representation; give them the same")
     return designs, reps
+
+
+def skin_representation(key: str, representation: str) -> str:
+    """The representation the skin geom ``skin_{key}`` takes for its region's ``representation``:
+    the same, except on a surface of several zones (the palm's), whose faces are pressed from
+    opposite sides (the palm between the partner's palm and fingers): one relaxation pad, a rigid
+    body on one slide, would feel the difference of the two pushes, not the squeeze, so such a
+    surface keeps soft contact. The scene never meets this case: with relaxation on the palm it
+    builds the palm in quarters, one pad each (`palm_skin`); a hand skinned by hand may."""
+    if key in SURFACES and representation == "soft-contact+relaxation":
+        return DEFAULT_REPRESENTATION
+    return representation
 
 
 def _hand_representation(name: str, what: str) -> str:
@@ -121,15 +164,44 @@ def _hand_representation(name: str, what: str) -> str:
     return name
 
 
+def palm_skin(representations: Mapping[str, str]) -> str:
+    """How the scene builds the palm's skin (`softhand.hands.config.PALM_SKINS`) for these
+    representations: one surface, or its quarters when the palm's zones ride relaxation pads
+    (one pad per quarter; the seams come back, and `ContactAreas.double_N` measures them)."""
+    relax = "soft-contact+relaxation"
+    return ("quarters" if any(representations.get(z) == relax for z in SURFACES["Palm"])
+            else "surface")
+
+
+def skin_keys(spec: mujoco.MjSpec | mujoco.MjModel, pro: str = "pro_") -> list[str]:
+    """The keys of the skin geoms ``{pro}skin_{key}`` the hand has (SKIN_KEYS: its regions'
+    own skins, the palm's surface or quarters, the thenar), in SKIN_KEYS's order.
+
+    Raises:
+        ValueError: a hand with neither the palm's surface nor all four of its quarters.
+    """
+    def has(name: str) -> bool:
+        if isinstance(spec, mujoco.MjSpec):
+            return spec.geom(name) is not None
+        return mujoco.mj_name2id(spec, mujoco.mjtObj.mjOBJ_GEOM, name) >= 0
+
+    keys = [k for k in SKIN_KEYS if has(f"{pro}skin_{k}")]
+    missing = [k for k in SKIN_KEYS if k not in keys and k not in SURFACES["Palm"]
+               and k not in SURFACES]
+    palm = "Palm" in keys or all(z in keys for z in SURFACES["Palm"])
+    if missing or not palm:
+        raise ValueError(f"prosthetic skin geoms {', '.join(f'{pro}skin_{k}' for k in missing)}"
+                         f"{' and the palm' if not palm else ''} not found")
+    return keys
+
+
 def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_") -> list[str]:
     """Add one pair per (prosthetic skin geom, partner tissue geom); return their names,
-    ``{Skin}__{tissue}`` with Skin a region (``Index1``) or a non-sensing skin (``Thenar``)."""
+    ``{Skin}__{tissue}`` with Skin a key of SKIN_KEYS: a phalanx's region (``Index1``), the palm's
+    surface (``Palm``) or a non-sensing skin (``Thenar``)."""
     tissues = partner_tissue_geoms(spec, hum)
-    geoms = {info.region: info.geom for info in regions(spec, pro).values()}
-    for name in UNSENSED_SKINS:
-        geoms[name] = f"{pro}skin_{name}"
-        if spec.geom(geoms[name]) is None:
-            raise ValueError(f"prosthetic skin geom {geoms[name]!r} not found")
+    regions(spec, pro)  # checks every region's elements are there
+    geoms = {key: f"{pro}skin_{key}" for key in skin_keys(spec, pro)}
     names = []
     for key, geom in geoms.items():
         for tissue in tissues:
@@ -141,12 +213,10 @@ def add_skin_pairs(spec: mujoco.MjSpec, *, pro: str = "pro_", hum: str = "hum_")
 
 
 def skin_of_pair(pair: str, skins: Mapping[str, str]) -> tuple[str, str]:
-    """(skin geom key, design) of a pair name made by `add_skin_pairs`: a region's own
-    design, or for a non-sensing skin the design of the region it belongs to."""
+    """(skin geom key, design) of a pair name made by `add_skin_pairs`: the design of the
+    region the skin wears (SKIN_KEYS: a phalanx's own, Palm1's for the palm and the thenar)."""
     key = pair.partition("__")[0]
-    if key in UNSENSED_SKINS:
-        return key, skins.get(UNSENSED_SKINS[key][1], "rigid")
-    return key, skins.get(key, "rigid")
+    return key, skins.get(SKIN_KEYS.get(key, key), "rigid")
 
 
 @functools.lru_cache(maxsize=32)
@@ -284,8 +354,9 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
     for pid in range(model.npair):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
         key, skin = skin_of_pair(name, skins)
-        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
-        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
+        region = SKIN_KEYS.get(key, key)
+        rep = get_representation(skin_representation(
+            key, reps.get(region, DEFAULT_REPRESENTATION)))
         g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
         if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
             g1, g2 = g2, g1
@@ -332,10 +403,10 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
     """
     reps = dict(representations or {})
     hand_pad = hand_pad or HandPad()
-    keys = [*skins, *UNSENSED_SKINS]
-    for key in keys:
-        region = UNSENSED_SKINS[key][1] if key in UNSENSED_SKINS else key
-        rep = get_representation(reps.get(region, DEFAULT_REPRESENTATION))
+    for key in skin_keys(spec, pro):
+        region = SKIN_KEYS[key]
+        rep = get_representation(skin_representation(
+            key, reps.get(region, DEFAULT_REPRESENTATION)))
         design = skins.get(region, "rigid")
         if type(rep).add_to_hand is Representation.add_to_hand or design == "rigid":
             continue

@@ -32,6 +32,7 @@ from softhand.envs.picture import (
     check_size,
     posed_data,
     region_colours,
+    skin_forces,
 )
 from softhand.envs.scenario import Scenario
 from softhand.envs.sensing import parse_placements, region_laws
@@ -398,8 +399,8 @@ class TwoHandTouchEnv(gym.Env):
             self._picture_data = mujoco.MjData(self.model)
         d = self.data
         state = posed_data(self.model, d.qpos, d.mocap_pos, d.mocap_quat, self._picture_data)
-        colours = region_colours(self.model, dict(zip(self.region_geoms, self._forces.tolist(),
-                                                      strict=True)))
+        colours = region_colours(self.model, skin_forces(self.model, self.region_names,
+                                                             self._forces))
         return self._picture.draw(state, self.render_view, colours=colours)
 
     # --- helpers -----------------------------------------------------------------------------

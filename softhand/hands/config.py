@@ -15,7 +15,7 @@ from softhand.hands import constants as const
 from softhand.paper import paper
 from softhand.validate import check_number
 
-__all__ = ["ACTUATIONS", "ARM_RANGES", "TIMESTEP_RANGE_S", "ArmConfig", "HandConfig",
+__all__ = ["ACTUATIONS", "ARM_RANGES", "PALM_SKINS", "TIMESTEP_RANGE_S", "ArmConfig", "HandConfig",
            "PartnerConfig", "ProstheticConfig", "SceneConfig"]
 
 #: Allowed simulation timestep of the handshake scene, closed interval (s). The skins were
@@ -29,6 +29,10 @@ __all__ = ["ACTUATIONS", "ARM_RANGES", "TIMESTEP_RANGE_S", "ArmConfig", "HandCon
 TIMESTEP_RANGE_S = (1e-4, 5e-3)
 #: How the sensored hand's 6 drives act (ProstheticConfig.actuation).
 ACTUATIONS = ("motors", "relaxed-human")
+#: How the prosthetic palm's skin is made (`ProstheticConfig.palm`): ``surface`` one continuous
+#: skin (palmar face, borders, back) whose regions are zones; ``quarters`` four skins (palmar /
+#: dorsal x proximal / distal), one per region, each able to ride its own relaxation pad
+PALM_SKINS = ("surface", "quarters")
 
 
 def _paper_mm(key: str) -> float:
@@ -159,6 +163,11 @@ class ProstheticConfig:
         actuation: ``motors`` (the prosthetic hand's 6 non-back-drivable motors) or
             ``relaxed-human`` (the same hand as the paper's sensored human hand: the 6 drives are
             soft position servos, constants.RELAXED_HUMAN, and hold a posture the env sets).
+        palm: the palm's skin (PALM_SKINS): ``surface`` (default) one continuous skin, Palm1,
+            Palm2, Back1 and Back2 its zones, so that no seam lies under a finger on the palm's
+            border; ``quarters`` one skin per region, which a relaxation pad needs (a pad is one
+            rigid body on one slide: a surface pressed from both faces would only feel the
+            difference of the two pushes), at the price of seams at the borders and mid-palm.
     """
 
     hand: HandConfig = field(default_factory=HandConfig)
@@ -168,10 +177,13 @@ class ProstheticConfig:
     stall_deflection_rad: float = const.PROSTHETIC["stall_deflection_rad"]
     armature_kg_m2: float = const.PROSTHETIC["armature_kg_m2"]
     actuation: str = "motors"
+    palm: str = "surface"
 
     def __post_init__(self) -> None:
         if self.actuation not in ACTUATIONS:
             raise ValueError(f"actuation = {self.actuation!r}: allowed {', '.join(ACTUATIONS)}")
+        if self.palm not in PALM_SKINS:
+            raise ValueError(f"palm = {self.palm!r}: allowed {', '.join(PALM_SKINS)}")
         _check("closing_time_s", self.closing_time_s, 0.05, 10.0, "s")
         _check("thumb_rotation_time_s", self.thumb_rotation_time_s, 0.05, 10.0, "s")
         _check("grip_force_n", self.grip_force_n, 0.0, 1000.0, "N")

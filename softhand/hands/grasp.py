@@ -57,7 +57,7 @@ import functools
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import mujoco
@@ -66,11 +66,17 @@ from mujoco import minimize
 
 from softhand.hands import constants as const
 from softhand.hands.config import SceneConfig
+from softhand.hands.envelope import hand_pieces
 from softhand.hands.layout import HandLayout, hand_layout
 from softhand.hands.partner import PARTNER_JOINTS
 from softhand.hands.scene import partner_quat, prosthetic_quat, scene_spec, web_point
+from softhand.hands.skeleton import add_piece
 from softhand.io import atomic_write_text
 from softhand.paths import cache_dir
+
+#: The envelope pieces (palm="quarters") whose shapes measure the palms' target: the palmar face of
+#: the prosthetic palm's surface, proximal and distal half
+_PALM_PROBES = ("palm_proximal", "palm_distal")
 
 __all__ = [
     "GRASP_SETTINGS",
@@ -172,23 +178,36 @@ class _Problem:
 
     def __init__(self, config: SceneConfig, settings: GraspSettings) -> None:
         self.config, self.s = config, settings
+        if config.prosthetic.palm != "surface":  # the palm's skin does not change the grasp
+            config = replace(config, prosthetic=replace(config.prosthetic, palm="surface"))
         self.pro, self.hum = hand_layout(config.prosthetic.hand), hand_layout(config.partner.hand)
         pos0, quat0 = _web_to_web_pose(config, self.pro, self.hum)
         spec = scene_spec(config, partner_pose=(pos0, quat0))
+        # the grasp measures the prosthetic palm's surface by its four quarters (their hull is
+        # the surface): the palms' target at the two palmar quarters, so that the palms press
+        # across their width, and the gaps and penetrations of each quarter. Probe geoms of the
+        # quarters' shapes, in this problem's model only (no contact, no pair: the scene has one
+        # palm skin), keep the grasp's definition as it was when the palm was four skins
+        palm = spec.body("pro_palm")
+        for piece in hand_pieces(self.pro, palm="quarters"):
+            if piece.body == "palm":
+                add_piece(spec, palm, piece, f"pro_probe_{piece.name}", contype=0, conaffinity=0,
+                          mass=0.0, group=5)
         m = spec.compile()
         m.opt.ccd_tolerance = 1e-6  # accurate distances and witness points (the Jacobian)
         self.m, self.d = m, mujoco.MjData(m)
         self.pos0, self.quat0 = pos0, quat0
         name = lambda i: m.geom(i).name  # noqa: E731
         geoms = range(m.ngeom)
-        self.pro_soft = [g for g in geoms if name(g).startswith("pro_skin_")]
+        self.pro_soft = [g for g in geoms if name(g).startswith(("pro_skin_", "pro_probe_"))
+                         and name(g) != "pro_skin_Palm"]
         # the hand's pieces only: the forearm's tissue is not a target of the grasp
         self.hum_soft = [g for g in geoms if name(g).startswith("hum_tissue_")
                          and name(g) != "hum_tissue_forearm"]
         self.pro_bone = [g for g in geoms if name(g).startswith("pro_bone_")]
         self.hum_bone = [g for g in geoms if name(g).startswith("hum_bone_")]
         gid = lambda n: m.geom(n).id  # noqa: E731
-        self.pro_palms = [gid("pro_skin_Palm1"), gid("pro_skin_Palm2")]
+        self.pro_palms = [gid(f"pro_probe_{p}") for p in _PALM_PROBES]
         self.hum_palm = gid("hum_tissue_palm")
         self.arm_qpos = int(m.jnt_qposadr[m.joint("hum_arm").id])
         self.hum_qpos = np.array([m.jnt_qposadr[m.joint(f"hum_{j}").id]
@@ -422,7 +441,8 @@ class _Problem:
             if k is not None:
                 rows.append(np.zeros((len(values), self.n)) if grads is None else grads)
 
-        # palms: both prosthetic palmar quarters pressed press_m into the partner's palm
+        # palms: both palmar quarters of the prosthetic palm's surface pressed press_m into the
+        # partner's palm
         for g, (dist, witness) in zip(self.pro_palms, measured.palms, strict=True):
             add([5.0 * (dist + s.press_m)],
                 None if k is None else 5.0 * k.distance(g, self.hum_palm, dist, witness)[None])
@@ -786,8 +806,8 @@ def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
                   hum: HandLayout) -> dict:
     """What a biomechanist checks in a handshake state (kinematics already computed):
 
-    ``palm_gap_mm``: signed distance between the prosthetic's palmar quarters and the partner's
-    palm (negative: pressed); ``thumb_tip_in_other_mm``: each thumb's pad in the other hand's frame
+    ``palm_gap_mm``: signed distance between the prosthetic palm's surface and the partner's
+    palm (negative: pressed), keyed ``Palm``; ``thumb_tip_in_other_mm``: each thumb's pad in the other hand's frame
     (x distal, y radial, z dorsal; z > 0 is over the back); ``fingertip_z_in_other_mm``: each
     fingertip's height in the other hand's frame (z > 0: past its mid-plane, onto its back);
     ``self_penetration_mm``: the deepest overlap of two pieces of the same hand (thumb on fingers,
@@ -806,7 +826,7 @@ def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
         return _in_frame(data, model.body(body).id, point)
 
     out: dict = {
-        "palm_gap_mm": {p: 1e3 * gd(f"pro_skin_{p}", "hum_tissue_palm") for p in ("Palm1", "Palm2")},
+        "palm_gap_mm": {"Palm": 1e3 * gd("pro_skin_Palm", "hum_tissue_palm")},
         "thumb_tip_in_other_mm": {
             "partner_on_prosthetic": (1e3 * local("pro_palm", pad("hum_", "thumb", hum))).tolist(),
             "prosthetic_on_partner": (1e3 * local("hum_palm", pad("pro_", "thumb", pro))).tolist(),

@@ -21,17 +21,21 @@ grip_force / 5 x digit length / 2 (the power grip shared by five digits acting a
 
 Skin (`softhand.hands.envelope`): the hand's whole soft envelope is skin, one layer of convex
 pieces with no piece inside another at rest: a trimmed capsule on every phalanx and on the thumb
-metacarpal (the thenar), and the palm's convex hull cut into four quarters (palmar / dorsal x
-proximal / distal), each a convex mesh. Every piece is a geom ``skin_{Name}`` with
-contype = conaffinity = 0 (contacts only through explicit ``<pair>`` elements added by the
-calibration stage) and wears a design:
+metacarpal (the thenar), and the palm, one convex mesh round the palmar face, both borders and
+the back (its hypothenar eminence included), so that no seam lies under a finger that wraps the
+palm's border. Every piece is a geom ``skin_{Key}`` with contype = conaffinity = 0 (contacts only
+through explicit ``<pair>`` elements added by the calibration stage) and wears a design
+(SKIN_KEYS: a phalanx's own region's, the palm's and the thenar's Palm1's):
 
-- the 18 sensing regions (names as in the paper, Fig. 1; 1 = proximal, 3 = distal) each have one
-  piece and a sensor zone, a box site ``touch_{Region}`` over the piece's contact side, with a MuJoCo
+- the 18 sensing regions (names as in the paper, Fig. 1; 1 = proximal, 3 = distal) each have a
+  sensor zone, a box site ``touch_{Region}`` over the contact side of its skin, with a MuJoCo
   contact sensor ``touch_{Region}`` on the contacts of that skin inside it (SENSOR_SLOTS slots; the
-  region's reading is the sum of their normal forces): the palmar half of a phalanx, the central
-  80 % of the palm's width on a palm quarter. Contacts elsewhere on the piece (a phalanx's dorsal
-  half, the palm's borders) are the region's *unsensed* skin: same design, force reported apart.
+  region's reading is the sum of their normal forces): the palmar half of a phalanx (whose skin is
+  the region's own piece), and on the one palm surface (SURFACES) a quarter's face: palmar or
+  dorsal, proximal or distal of mid-palm, the central 80 % of the palm's width. The zones of one
+  surface do not overlap, so a contact is read by one region at most. Contacts elsewhere on a
+  skin (a phalanx's dorsal half, the palm's borders) are *unsensed* skin: same design, force
+  reported apart, with the region of the nearest zone (`zone_of`).
 - Thumb1 / Thumb2: proximal / distal phalanx of the thumb (it has no middle phalanx).
 - Index1..Little3: proximal, middle and distal phalanges.
 - Palm1 / Palm2: proximal / distal palmar quarter of the palm (Palm2 under the metacarpal heads).
@@ -67,6 +71,8 @@ from softhand.paper import paper
 __all__ = [
     "REGION_PIECES",
     "REGION_SEGMENTS",
+    "SKIN_KEYS",
+    "SURFACES",
     "UNSENSED_SKINS",
     "RegionInfo",
     "add_prosthetic_hand",
@@ -74,6 +80,7 @@ __all__ = [
     "paper_regions",
     "prosthetic_actuators",
     "regions",
+    "skin_key",
 ]
 
 _BOX = mujoco.mjtGeom.mjGEOM_BOX
@@ -94,16 +101,35 @@ REGION_SEGMENTS: dict[str, str] = {
     "Back2": "palm",
 }
 
+#: Skins that carry several sensing regions as zones: skin key -> its regions. The palm is one
+#: continuous surface (palmar face, borders and back): a finger on its border presses one skin.
+SURFACES: dict[str, tuple[str, ...]] = {"Palm": ("Palm1", "Palm2", "Back1", "Back2")}
 #: Envelope piece (softhand.hands.envelope) that carries each region's skin.
 REGION_PIECES: dict[str, str] = {
     **{r: seg for r, seg in REGION_SEGMENTS.items() if seg != "palm"},
-    "Palm1": "palm_proximal",
-    "Palm2": "palm_distal",
-    "Back1": "back_proximal",
-    "Back2": "back_distal",
+    **{r: "palm" for r in SURFACES["Palm"]},
 }
 #: Non-sensing skin: name -> (envelope piece, region whose design it wears).
 UNSENSED_SKINS: dict[str, tuple[str, str]] = {"Thenar": ("thumb_metacarpal", "Palm1")}
+#: Every skin geom ``skin_{key}`` a hand can have: key -> the region whose design it wears (a
+#: region's own skin: the region; the palm's surface and the thenar: Palm1). A hand has the
+#: palm's surface or its four quarters (ProstheticConfig.palm), not both.
+SKIN_KEYS: dict[str, str] = {
+    **{r: r for r in REGION_SEGMENTS},
+    **{key: zones[0] for key, zones in SURFACES.items()},
+    **{name: region for name, (_, region) in UNSENSED_SKINS.items()},
+}
+_QUARTERS = dict(zip(SURFACES["Palm"], ("palm_proximal", "palm_distal", "back_proximal",
+                                        "back_distal"), strict=True))
+
+
+def skin_key(region: str, palm: str = "surface") -> str:
+    """The key of the skin geom ``skin_{key}`` that carries ``region`` on a hand whose palm is
+    ``palm`` (PALM_SKINS): a surface's, or the region's own."""
+    for key, zones in SURFACES.items():
+        if region in zones and palm == "surface":
+            return key
+    return region
 #: Share of the palm's half-width watched by a palm region's sensor zone (the borders are
 #: unsensed skin). assumption: the paper's palm sensors sat on the palm's faces, not its edges.
 _PALM_ZONE_WIDTH = 0.8
@@ -120,7 +146,8 @@ class RegionInfo:
     Attributes:
         region: paper name, e.g. "Middle2".
         body: body that carries the skin.
-        geom: the skin geom (a capsule on a phalanx, a convex mesh on the palm).
+        geom: the skin geom that carries it (a capsule on a phalanx; the palm's one convex mesh,
+            shared by the palm's four zones).
         site: the sensor zone, a box over the skin's contact side.
         sensor: the contact sensor on the skin's contacts inside that site.
         bone_sensors: contact sensors on the region body's bones inside that site (a
@@ -252,29 +279,39 @@ def add_prosthetic_hand(
     )
     regions_ = paper_regions()
 
-    # Skins: every envelope piece; sensing regions also get a zone and a contact sensor.
-    pieces = {p.name: p for p in hand_pieces(layout, palm="quarters")}
-    skin_of = {REGION_PIECES[r]: r for r in regions_}
-    skin_of.update({piece: name for name, (piece, _) in UNSENSED_SKINS.items()})
-    if set(skin_of) != set(pieces):
-        raise RuntimeError(f"skin pieces {sorted(skin_of)} do not match the envelope's "
-                           f"{sorted(pieces)}")
-    for piece_name, skin in skin_of.items():
+    # Skins: every envelope piece, the palm whole; each sensing region gets a zone and a contact
+    # sensor on its skin. The palm's zones are its quarters' faces (the quarters are cut only to
+    # place the zones: the skin stays one surface).
+    surface = config.palm == "surface"
+    pieces = {p.name: p for p in hand_pieces(layout, palm="whole" if surface else "quarters")}
+    quarters = {p.name: p for p in hand_pieces(layout, palm="quarters") if p.body == "palm"}
+    piece_of = {r: p for r, p in REGION_PIECES.items() if p != "palm"}
+    if surface:
+        piece_of.update({key: REGION_PIECES[zones[0]] for key, zones in SURFACES.items()})
+    else:
+        piece_of.update(_QUARTERS)
+    piece_of.update({name: piece for name, (piece, _) in UNSENSED_SKINS.items()})
+    if set(piece_of.values()) != set(pieces):
+        raise RuntimeError(f"skin pieces {sorted(piece_of.values())} do not match the "
+                           f"envelope's {sorted(pieces)}")
+    for key, piece_name in piece_of.items():
         piece = pieces[piece_name]
+        add_piece(spec, skel.bodies[piece.body], piece, f"{prefix}skin_{key}", contype=0,
+                  conaffinity=0, mass=0.0, group=1, rgba=list(_SKIN_RGBA))
+    for region in regions_:
+        key = skin_key(region, config.palm)
+        piece = quarters[_QUARTERS[region]] if region in _QUARTERS else pieces[piece_of[key]]
         body = skel.bodies[piece.body]
-        add_piece(spec, body, piece, f"{prefix}skin_{skin}", contype=0, conaffinity=0, mass=0.0,
-                  group=1, rgba=list(_SKIN_RGBA))
-        if skin in regions_:
-            centre, half = _zone(piece, layout)
-            body.add_site(name=f"{prefix}touch_{skin}", type=_BOX, pos=centre, size=half,
-                          group=4, rgba=list(_SITE_RGBA))
-            add_contact_sensor(spec, f"{prefix}touch_{skin}", f"{prefix}skin_{skin}",
-                               site=f"{prefix}touch_{skin}")
-            # the region's bones bottoming out inside its zone: felt there too (normal forces,
-            # as the skin's sensor; bone on bone is outside every law's calibration)
-            for i, bone in enumerate(_bones_of(body, prefix)):
-                add_contact_sensor(spec, f"{prefix}touch_bone_{skin}_{i}", bone,
-                                   site=f"{prefix}touch_{skin}")
+        centre, half = _zone(piece, layout)
+        body.add_site(name=f"{prefix}touch_{region}", type=_BOX, pos=centre, size=half,
+                      group=4, rgba=list(_SITE_RGBA))
+        add_contact_sensor(spec, f"{prefix}touch_{region}", f"{prefix}skin_{key}",
+                           site=f"{prefix}touch_{region}")
+        # the region's bones bottoming out inside its zone: felt there too (normal forces,
+        # as the skin's sensor; bone on bone is outside every law's calibration)
+        for i, bone in enumerate(_bones_of(body, prefix)):
+            add_contact_sensor(spec, f"{prefix}touch_bone_{region}_{i}", bone,
+                               site=f"{prefix}touch_{region}")
 
     # Couplings and motors. Ratios make all joints of a digit reach their upper limits together.
     grip_share = config.grip_force_n / const.PROSTHETIC["grip_digits"]
@@ -369,17 +406,19 @@ def build_prosthetic_hand(
 def regions(
     model_or_spec: mujoco.MjModel | mujoco.MjSpec, prefix: str = "pro_"
 ) -> dict[str, RegionInfo]:
-    """Region name -> names of its body, skin geom, site and contact sensor, in the paper's order.
+    """Region name -> names of its body, skin geom, site and contact sensor, in the paper's order
+    (the palm's regions: zones of its surface, or its quarters, as the hand was built).
 
     Raises:
         ValueError: if an element of a region is missing from ``model_or_spec``.
     """
     out: dict[str, RegionInfo] = {}
+    quarters = _has(model_or_spec, "geom", f"{prefix}skin_{SURFACES['Palm'][0]}")
     for region in paper_regions():
         info = RegionInfo(
             region=region,
             body=f"{prefix}{REGION_SEGMENTS[region]}",
-            geom=f"{prefix}skin_{region}",
+            geom=f"{prefix}skin_{skin_key(region, 'quarters' if quarters else 'surface')}",
             site=f"{prefix}touch_{region}",
             sensor=f"{prefix}touch_{region}",
             bone_sensors=_bone_sensors(model_or_spec, f"{prefix}touch_bone_{region}_"),
