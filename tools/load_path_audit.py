@@ -197,15 +197,22 @@ def overload_cases() -> list[dict]:
 def who_loads(hand: str = "prosthetic", seed: int = 0) -> dict:
     """For each of the paper's regions: the partner geom that pressed its skin geom most (N s,
     over the whole episode, all of the skin geom's contacts, its sensor zone or not), its share
-    of the region's skin force, and the phase and time of the region's peak (its reading)."""
+    of the region's skin force, and the phase and time of the region's peak (its reading). On
+    the palm's one surface a contact belongs to the nearest zone (`ContactAreas.region_at`)."""
     import gymnasium as gym
 
     import softhand.envs  # noqa: F401
     from softhand.envs.controllers import make_controller
 
+    from softhand.envs.run import ContactAreas
+
     env = gym.make("softhand/Handshake-v0", hand=hand).unwrapped
     m, d = env.model, env.data
-    region_of = {m.geom(f"pro_skin_{r}").id: r for r in env.region_names}
+    # each contact's region: its skin's, or on the palm's one surface the nearest zone's
+    areas = ContactAreas(m, [m.geom(g).id for g in env.region_geoms], None,
+                         [m.site(f"pro_touch_{r}").id for r in env.region_names])
+    region_of = {int(g): r for g, r in zip((m.geom(g).id for g in env.region_geoms),
+                                          env.region_names, strict=True)}
     by = {r: {} for r in env.region_names}
     peak = dict.fromkeys(env.region_names, (0.0, 0.0, ""))
     policy = make_controller("neutral")
@@ -222,7 +229,7 @@ def who_loads(hand: str = "prosthetic", seed: int = 0) -> dict:
             if skin not in region_of or not m.geom(other).name.startswith("hum_"):
                 continue
             name = m.geom(other).name.removeprefix("hum_tissue_")
-            acc = by[region_of[skin]]
+            acc = by[env.region_names[areas.region_at(d, skin, c.pos)]]
             acc[name] = acc.get(name, 0.0) + float(d.efc_force[c.efc_address]) * dt
         for r, f in info["region_forces_N"].items():
             if f > peak[r][0]:
