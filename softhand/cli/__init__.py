@@ -36,7 +36,16 @@ it only when the run completes (`softhand.io.staged_folder`).
 
 from __future__ import annotations
 
-from softhand.cli import bench, calibrate, fe, handshake, population, sensors, skin  # noqa: F401
+from softhand.cli import (  # noqa: F401
+    bench,
+    calibrate,
+    fe,
+    handshake,
+    materials,
+    population,
+    sensors,
+    skin,
+)
 from softhand.cli.app import (
     EXIT_CONVERGENCE,
     EXIT_INTERRUPTED,
