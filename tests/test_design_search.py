@@ -10,6 +10,7 @@ pocket2-sil to rounding; the durability usage is the peak strain over the elonga
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -18,7 +19,10 @@ from click.testing import CliRunner
 
 from softhand.cli import main
 from softhand.design.evaluate import evaluate, screen_settings
+from softhand.design.search import hypervolume, run_search
 from softhand.design.space import VARIABLES, Candidate, DesignSpace
+from softhand.design.stl import exact_volume_mm3, phalanx_mesh, write_stl
+from softhand.fem.geometry import PhalanxGeometry
 from softhand.fem.library import (
     compression_check,
     fit_datasheet,
@@ -175,3 +179,110 @@ def test_peak_strain_is_zero_without_load_and_grows_with_it():
     assert 0 < small < peak_strains(r2)["outer"].max_principal_strain
     zero = peak_strains(replace(r, ramp_end_u=np.zeros_like(r.ramp_end_u)))
     assert zero["outer"].max_principal_strain == pytest.approx(0.0, abs=1e-12)
+
+
+# --- the search: journal, resume, outputs --------------------------------------------------
+def test_three_trial_search_runs_and_resumes_the_same_study(tmp_path):
+    """3 trials on the coarse mesh, then --resume to 5: the journal's study continues (trials 0-2
+    kept as they were, 2 new ones, none repeated)."""
+    space = DesignSpace(materials=("ecoflex-00-30", "dragon-skin-10"))
+    first = run_search(space, trials=3, out=tmp_path, mesh="coarse")
+    assert (first.done_before, first.ran, first.failed) == (0, 3, {})
+    values = {t.number: tuple(t.values) for t in first.study.trials}
+    again = run_search(space, trials=5, out=tmp_path, mesh="coarse", resume=True)
+    assert (again.done_before, again.ran) == (3, 2)
+    trials = again.study.trials
+    assert [t.number for t in trials] == [0, 1, 2, 3, 4]
+    assert {t.number: tuple(t.values) for t in trials[:3]} == values
+    params = [tuple(sorted(t.params.items())) for t in trials]
+    assert len(set(params)) == 5
+    with pytest.raises(ValueError, match="holds a study already: add --resume"):
+        run_search(space, trials=5, out=tmp_path, mesh="coarse")
+    with pytest.raises(ValueError, match=r"other settings \(mesh 'coarse' \(the journal\) vs "):
+        run_search(space, trials=6, out=tmp_path, mesh="default", resume=True)
+
+
+def test_an_interrupted_trial_is_failed_and_not_counted(tmp_path):
+    space = DesignSpace(materials=("dragon-skin-10",))
+    s = run_search(space, trials=1, out=tmp_path, mesh="coarse")
+    s.study.ask()  # a trial left running, as Ctrl-C leaves it
+    again = run_search(space, trials=2, out=tmp_path, mesh="coarse", resume=True)
+    states = [t.state.name for t in again.study.trials]
+    assert states == ["COMPLETE", "FAIL", "COMPLETE"]
+    assert again.study.trials[1].user_attrs["error"] == "interrupted"
+
+
+def test_search_refuses_bad_input_before_any_work(tmp_path):
+    with pytest.raises(ValueError, match="trials = 0: allowed an integer >= 1"):
+        run_search(DesignSpace(), trials=0, out=tmp_path)
+    with pytest.raises(ValueError, match="sil has no elongation at break"):
+        run_search(DesignSpace(materials=("sil",)), trials=1, out=tmp_path)
+    assert not (tmp_path / "journal.log").exists()
+
+
+def test_hypervolume_of_a_known_front():
+    pts = np.array([[1.0, 3.0], [2.0, 1.0], [3.0, 2.0]])  # the last is dominated
+    assert hypervolume(pts, (4.0, 4.0)) == pytest.approx(3 * 1 + 2 * 2)
+
+
+@pytest.mark.parametrize("geom", [PhalanxGeometry(pocket_height_mm=2.0), PhalanxGeometry(
+    outer_layer_mm=0.6, pocket_roof_mm=1.1, pocket_height_mm=3.0, pocket_half_width_mm=6.2)])
+def test_stl_is_watertight_with_the_sections_volume_and_an_open_pocket(tmp_path, geom):
+    """Watertight; volume = exact section area x length within 1 % (0.05 % on the fine mesh);
+    Euler number 0: one through-hole, the pocket a straight core pulls out of; mm bounds."""
+    import trimesh
+
+    info = write_stl(geom, tmp_path / "p.stl")
+    solid = trimesh.load(tmp_path / "p.stl")
+    assert solid.is_watertight and info["watertight"]
+    assert solid.volume == pytest.approx(exact_volume_mm3(geom), rel=0.01)
+    assert abs(info["volume_error_pct"]) < 0.1
+    assert solid.euler_number == 0
+    np.testing.assert_allclose(solid.bounds, [[-8, 0, 0], [8, 9, 10]], atol=1e-9)
+
+
+def test_exact_volume_of_the_solid_half_ellipse():
+    g = PhalanxGeometry()
+    assert exact_volume_mm3(g) == pytest.approx(np.pi * 8 * 9 / 2 * 10, rel=1e-12)
+    assert phalanx_mesh(g).euler_number == 2  # no pocket: no hole
+
+
+@pytest.mark.slow
+def test_search_command_writes_table_picture_and_stls_and_resumes(tmp_path):
+    """The command end to end on the coarse mesh: 3 trials, 1 winner checked in 3D."""
+    out = tmp_path / "ds"
+    args = ["design", "search", "--trials", "3", "--out", str(out), "--mesh", "coarse",
+            "--check", "1", "--materials", "ecoflex-00-30,dragon-skin-10"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    data = json.loads((out / "designs.json").read_text())
+    assert data["n_trials_complete"] == 3 and len(data["winners"]) == 1
+    w = data["winners"][0]
+    assert w["check_3d"]["mode"] == "3d" and w["stl"]["watertight"]
+    assert data["baseline"]["3d"]["lifelike_distance_pct"] > 0
+    for name in ("designs.md", "pareto.png", "journal.log"):
+        assert (out / name).stat().st_size > 0
+    r = CliRunner().invoke(main, [*args[:3], "4", *args[4:], "--resume"])
+    assert r.exit_code == 0, r.output
+    assert json.loads((out / "designs.json").read_text())["n_trials_complete"] == 4
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--materials", "ecoflex-00-31"], "--materials: material 'ecoflex-00-31' is unknown; allowed"),
+    (["--bound", "pocket_height_mm=3:1"], "--bound bound pocket_height_mm=3:1: the low bound 3 is "
+                                          "not below the high bound 1"),
+    (["--bound", "floor=1:2"], "--bound bound 'floor=1:2': expected NAME=LO:HI"),
+    (["--trials", "0"], "'--trials': 0 is not in the range x>=1"),
+    pytest.param(["--cluster", "tcp://127.0.0.1:9"], "--cluster", marks=pytest.mark.slow),
+    (["--max-force", "1"], "'--max-force': '1' is outside the allowed range 2 <= x <= 20 N"),
+])
+def test_search_command_bad_input_is_one_line_naming_the_flag(tmp_path, args, words):
+    base = {"--trials": "3", "--out": str(tmp_path / "x")}
+    for k in args[::2]:
+        base.pop(k, None)
+    flat = [x for kv in base.items() for x in kv]
+    r = CliRunner().invoke(main, ["design", "search", *flat, *args])
+    assert r.exit_code == 2, r.output
+    lines = [ln for ln in r.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0], r.output
+    assert not (tmp_path / "x" / "journal.log").exists()
