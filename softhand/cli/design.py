@@ -153,21 +153,28 @@ def samplers(trials, seeds, materials, mesh, report_dir) -> None:
         bad(f"--seeds {seeds!r}: expected integers >= 0 separated by commas, e.g. 0,1,2")
     space = _space((), materials)
     report = checked_dir(report_dir, "--report", need_bytes=1e5)
+    from softhand.bench.common import machine_info
+
+    machine = machine_info()
     with tempfile.TemporaryDirectory() as work:
         data = compare_samplers(space, trials=trials, seeds=seed_list, out=work, mesh=mesh,
                                 progress=progress_line)
+    data["machine"] = machine
     atomic_write_json(report / "design-search-samplers.json", data)
     atomic_write_text(report / "design-search-samplers.md", samplers_markdown(data))
     click.echo(samplers_markdown(data))
 
 
 def samplers_markdown(data) -> str:
+    from softhand.bench.common import machine_line
+
     ref = data["reference"]
     lines = [f"# Design search: sampler against sampler ({data['trials']} trials, seeds "
              f"{', '.join(map(str, data['seeds']))}, 2D {data['mesh']} mesh)", "",
              "Hypervolume of the Pareto front (lifelike distance %, durability usage), both "
              f"minimised, up to the reference point ({ref[0]:g} %, {ref[1]:g}); larger is better. "
-             "Written by `softhand design samplers`.", "",
+             f"Materials: {', '.join(data['space']['materials'])}. Written by `softhand design "
+             "samplers`.", "", *([machine_line(data["machine"]), ""] if "machine" in data else []),
              "| sampler | hypervolume per seed | mean | best lifelike % per seed | wall s per seed |",
              "|---|---|---|---|---|"]
     for name, r in data["samplers"].items():

@@ -1,7 +1,8 @@
 """What a search leaves in its folder: the 3D check of the winners, a table, a picture, STLs.
 
 * ``designs.json`` / ``designs.md``: the Pareto set of the 2D screen; for the checked winners
-  (up to ``check`` designs spread along the front) the same objectives from the 3D quarter model
+  (up to ``check`` designs spread along the part of the front more lifelike than pocket2-sil in
+  2D, or along the whole front where none is) the same objectives from the 3D quarter model
   and the differences 3D - 2D; the paper's pocket2-sil beside them, run the same way.
 * ``pareto.png``: every trial's two objectives, the front, the 3D values of the winners, and
   pocket2-sil's lifelike distance.
@@ -31,13 +32,16 @@ BASELINE = Candidate(outer_layer_mm=0.8, pocket_roof_mm=1.4, pocket_height_mm=2.
                      pocket_half_width_mm=5.0, inner="sil", outer="sil")
 
 
-def choose_winners(front: list[dict[str, Any]], k: int) -> list[dict[str, Any]]:
-    """Up to ``k`` designs spread along the front (sorted by lifelike distance): its two ends
-    and evenly spaced ones between, the most lifelike first."""
-    if len(front) <= k:
-        return list(front)
-    idx = np.unique(np.round(np.linspace(0, len(front) - 1, k)).astype(int))
-    return [front[i] for i in idx]
+def choose_winners(front: list[dict[str, Any]], k: int, *, below: float | None = None
+                   ) -> list[dict[str, Any]]:
+    """Up to ``k`` designs spread along the front (sorted by lifelike distance): the ends and
+    evenly spaced ones between, the most lifelike first. ``below``: only the designs more
+    lifelike than that distance (%), e.g. pocket2-sil's, where the front has any."""
+    pool = [r for r in front if below is None or r["lifelike_distance_pct"] < below] or front
+    if len(pool) <= k:
+        return list(pool)
+    idx = np.unique(np.round(np.linspace(0, len(pool) - 1, k)).astype(int))
+    return [pool[i] for i in idx]
 
 
 def _delta(a: float | None, b: float | None) -> float | None:
@@ -155,7 +159,8 @@ def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "defaul
     out = Path(out)
     trials = completed(study)
     front = pareto_evaluations(study)
-    winners = choose_winners(front, check)
+    base_2d = evaluate(BASELINE, screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N))
+    winners = choose_winners(front, check, below=base_2d.lifelike_distance_pct)
     checked = check_in_3d(winners, mesh=mesh, max_force_N=max_force_N, threads=threads,
                           cluster=cluster)
     (out / "stl").mkdir(parents=True, exist_ok=True)
