@@ -53,7 +53,7 @@ def markdown(data: dict) -> str:
         machine_line(data["machine"]), "",
         f"- 2D screen: {data['screen_wall_s']:.0f} s wall for {data['trials_asked']} trials "
         f"({data['screen_wall_s'] / data['trials_asked']:.2f} s per trial: FE, sampler and "
-        f"journal); {data['n_trials_complete']} complete, {len(data['failed_this_run'])} failed "
+        f"journal); {data['n_trials_complete']} complete, {len(data['failed_this_run'])} failed"
         + (f" (the first: {next(iter(data['failed_this_run'].values()))[:160]})"
            if data["failed_this_run"] else ""),
         f"- 3D check of {len(data['winners'])} winners and pocket2-sil (2D and 3D): "
@@ -82,7 +82,7 @@ def markdown(data: dict) -> str:
             else 100 * (b3["displacement_mm"][1] / b2["displacement_mm"][1] - 1))
     lines.append(f"| pocket2-sil | {_f(b3['lifelike_distance_pct'] - b2['lifelike_distance_pct'], '+.1f')}"
                  f" | n/a | {_f(b_d2, '+.1f')} % | | |")
-    lines += ["", "![Pareto front of the design search](design-search.png)", ""]
+    lines += ["", "The picture: `reports/design-search.png` (on the design search page).", ""]
     return "\n".join(lines) + "\n"
 
 

@@ -111,9 +111,8 @@ def search(trials, materials, bounds, out_dir, seed, resume, sampler, mesh, max_
         bar.close()
     done = outcome.done_before + outcome.ran
     if outcome.interrupted:
-        raise Stopped(f"interrupted: {done} of {trials} trials are in {journal}; "
-                      f"`softhand design search --trials {trials} --out {out} --resume` continues",
-                      EXIT_INTERRUPTED)
+        raise Stopped(f"interrupted: {done} of {trials} trials are in {journal}; the same "
+                      "command with --resume continues the study", EXIT_INTERRUPTED)
     progress_line(f"checking {n_check} winners and pocket2-sil in 3D")
     extra = {"trials_asked": trials, "sampler": sampler, "seed": seed, "mesh": mesh,
              "max_force_N": max_force_N, "screen_wall_s_this_run": outcome.wall_s,

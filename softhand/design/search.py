@@ -105,18 +105,25 @@ def _counted(study) -> int:
     """Finished trials: complete, or failed by the FE (not interrupted)."""
     from optuna.trial import TrialState
 
+    stale = set(study.user_attrs.get("interrupted_trials", []))
     return sum(1 for t in study.get_trials(deepcopy=False)
                if t.state == TrialState.COMPLETE
-               or (t.state == TrialState.FAIL and t.user_attrs.get("error") != "interrupted"))
+               or (t.state == TrialState.FAIL and t.number not in stale
+                   and t.user_attrs.get("error") != "interrupted"))
 
 
 def _close_stale(study) -> None:
-    """Trials left running by an interrupted run: failed, ``interrupted``."""
+    """Trials left running by an interrupted run: failed, and listed in the study's
+    ``interrupted_trials`` (they do not count)."""
     from optuna.trial import TrialState
 
-    for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
-        study._storage.set_trial_user_attr(t._trial_id, "error", "interrupted")
-        study._storage.set_trial_state_values(t._trial_id, TrialState.FAIL)
+    running = [t.number for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))]
+    if not running:
+        return
+    for number in running:
+        study.tell(number, state=TrialState.FAIL)
+    study.set_user_attr("interrupted_trials",
+                        sorted({*study.user_attrs.get("interrupted_trials", []), *running}))
 
 
 def _ask(study, space: DesignSpace) -> tuple[Any, Candidate]:
@@ -158,7 +165,9 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
 
     Args:
         trials: total finished trials wanted in the study (a resume counts those in the journal).
-        threads: local worker processes (1: this process); not with ``cluster``.
+        threads: local worker processes (1: this process, one trial at a time; N: batches of
+            4 N trials, the sampler asked for all of a batch before it runs); not with
+            ``cluster``.
         cluster: a Dask scheduler's address: batches of 8 on its workers.
         progress: called with (finished trials, ``trials``) once the study is open and after
             each trial.
@@ -184,40 +193,46 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
     if progress:
         progress(before, trials)
     settings = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N)
-    batch_size = 8 if cluster is not None else max(1, threads or 1)
+    workers = 1 if cluster is not None else max(1, threads or 1)
+    # local workers start with each batch (parallel.run_tasks): batches of 4 per worker amortise
+    # that; the cluster's workers stay up, 8 at a time keep them busy
+    batch_size = 8 if cluster is not None else (1 if workers == 1 else 4 * workers)
     failed: dict[int, str] = {}
     ran, interrupted = 0, False
     while before + ran < trials and not interrupted:
-        n = min(batch_size, trials - before - ran)
-        asked = dict(_ask(study, space) for _ in range(n))
-        by_number = {t.number: (t, c) for t, c in asked.items()}
-        tasks = [(num, (c, settings)) for num, (_, c) in by_number.items()]
-        outcome = run_tasks(evaluate, tasks, threads=None if cluster else 1 if n == 1 else n,
-                            cluster=cluster)
-        for num, (trial, _) in by_number.items():
-            if num in outcome.results:
-                ev: Evaluation = outcome.results[num]
-                trial.set_user_attr("evaluation", ev.to_dict())
-                if any(v is None for v in ev.objectives):
-                    why = "2 N not reached" if ev.lifelike_distance_pct is None else "no usage"
+        try:
+            n = min(batch_size, trials - before - ran)
+            asked = dict(_ask(study, space) for _ in range(n))
+            by_number = {t.number: (t, c) for t, c in asked.items()}
+            tasks = [(num, (c, settings)) for num, (_, c) in by_number.items()]
+            outcome = run_tasks(evaluate, tasks, threads=None if cluster else min(n, workers),
+                                cluster=cluster)
+            for num, (trial, _) in by_number.items():
+                if num in outcome.results:
+                    ev: Evaluation = outcome.results[num]
+                    trial.set_user_attr("evaluation", ev.to_dict())
+                    if any(v is None for v in ev.objectives):
+                        why = "2 N not reached" if ev.lifelike_distance_pct is None else "no usage"
+                        trial.set_user_attr("error", why)
+                        study.tell(trial, state=_fail())
+                        failed[num] = why
+                    else:
+                        study.tell(trial, list(ev.objectives))
+                elif num in outcome.errors:
+                    why = " ".join(str(outcome.errors[num]).split())[:300]
                     trial.set_user_attr("error", why)
                     study.tell(trial, state=_fail())
                     failed[num] = why
                 else:
-                    study.tell(trial, list(ev.objectives))
-            elif num in outcome.errors:
-                why = " ".join(str(outcome.errors[num]).split())[:300]
-                trial.set_user_attr("error", why)
-                study.tell(trial, state=_fail())
-                failed[num] = why
-            else:
-                trial.set_user_attr("error", "interrupted")
-                study.tell(trial, state=_fail())
-                continue
-            ran += 1
-            if progress:
-                progress(before + ran, trials)
-        interrupted = outcome.interrupted
+                    trial.set_user_attr("error", "interrupted")
+                    study.tell(trial, state=_fail())
+                    continue
+                ran += 1
+                if progress:
+                    progress(before + ran, trials)
+            interrupted = outcome.interrupted
+        except KeyboardInterrupt:  # between two FE runs (asking, telling): stop here too;
+            interrupted = True     # a trial asked and not told is closed on --resume
     return SearchOutcome(study=study, done_before=before, ran=ran, failed=failed,
                          interrupted=interrupted, wall_s=time.perf_counter() - t0)
 
