@@ -322,3 +322,21 @@ def test_ctrl_c_keeps_the_journal_and_resume_continues_the_study(tmp_path):
     data = json.loads((out / "designs.json").read_text())
     assert data["n_trials_complete"] >= done
     assert f"{done + 2} trials (2 this run" in res.stdout
+
+
+@pytest.mark.slow
+def test_trials_on_a_dask_cluster_are_the_local_trials(tmp_path):
+    """The same seed on a LocalCluster (the --cluster engine, batches of 8) and in this process
+    (one at a time): the same designs and objectives, trial for trial (TPE's first 10 trials are
+    seeded random draws, so the batching does not change them)."""
+    from distributed import LocalCluster
+
+    space = DesignSpace(materials=("ecoflex-00-30", "dragon-skin-10"))
+    local = run_search(space, trials=3, out=tmp_path / "local", mesh="coarse")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as c:
+        remote = run_search(space, trials=3, out=tmp_path / "remote", mesh="coarse",
+                            threads=None, cluster=c.scheduler_address)
+    assert [t.params for t in remote.study.trials] == [t.params for t in local.study.trials]
+    for a, b in zip(remote.study.trials, local.study.trials, strict=True):
+        assert a.values == pytest.approx(b.values, rel=1e-9)
