@@ -3,7 +3,8 @@
     taskset -c 1 python tools/design_search_report.py [--trials 300] [--work DIR]
 
 Runs `softhand design search` (the same functions) on one core, the seven library silicones with
-an elongation at break as the materials, and writes ``reports/design-search.{md,json,png}``: the
+an elongation at break as the materials, and writes ``reports/design-search.{md,json,png}`` and
+``reports/design-search-curves.png``: the
 wall time of the screen and of the 3D check, the Pareto front, the winners' objectives in 2D and
 3D with their differences, their lifelike distance beside pocket2-sil's (this run's 2D and 3D, and
 the calibrated skin's in ``calibration/skins/index.json``), and the STL checks. The study, the
@@ -82,7 +83,9 @@ def markdown(data: dict) -> str:
             else 100 * (b3["displacement_mm"][1] / b2["displacement_mm"][1] - 1))
     lines.append(f"| pocket2-sil | {_f(b3['lifelike_distance_pct'] - b2['lifelike_distance_pct'], '+.1f')}"
                  f" | n/a | {_f(b_d2, '+.1f')} % | | |")
-    lines += ["", "The picture: `reports/design-search.png` (on the design search page).", ""]
+    lines += ["", "The pictures: `reports/design-search.png` (the front) and "
+              "`reports/design-search-curves.png` (the winners' curves against the human "
+              "phalanges), on the design search page.", ""]
     return "\n".join(lines) + "\n"
 
 
@@ -112,6 +115,8 @@ def main() -> None:
     REPORTS_DIR.mkdir(exist_ok=True)
     atomic_write_json(REPORTS_DIR / "design-search.json", json.loads(json.dumps(data, default=float)))
     shutil.copyfile(work / "pareto.png", REPORTS_DIR / "design-search.png")
+    if (work / "curves.png").exists():
+        shutil.copyfile(work / "curves.png", REPORTS_DIR / "design-search-curves.png")
     atomic_write_text(REPORTS_DIR / "design-search.md", markdown(data))
     print(markdown(data))
 

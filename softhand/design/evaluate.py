@@ -80,6 +80,7 @@ class Evaluation:
         useful_sensors: placements that meet the criteria that a ramp can test.
         wall_s: the FE run's wall time.
         n_dofs: model size.
+        curve: the ramp, ``{"displacement_mm": [...], "force_N": [...]}`` (5 significant digits).
     """
 
     candidate: Candidate
@@ -96,6 +97,7 @@ class Evaluation:
     useful_sensors: tuple[str, ...] = ()
     wall_s: float = 0.0
     n_dofs: int = 0
+    curve: dict[str, list[float]] = field(default_factory=dict)
 
     @property
     def objectives(self) -> tuple[float | None, float | None]:
@@ -111,7 +113,7 @@ class Evaluation:
                 "interface_sensitivity": self.interface_sensitivity,
                 "floor_dead_band_N": self.floor_dead_band_N,
                 "useful_sensors": list(self.useful_sensors), "wall_s": self.wall_s,
-                "n_dofs": self.n_dofs}
+                "n_dofs": self.n_dofs, "curve": self.curve}
 
 
 def _sensors(r: IndentationResult) -> tuple[float | None, list[float] | None, tuple[str, ...]]:
@@ -165,4 +167,6 @@ def evaluate(candidate: Candidate, settings: IndentationSettings | None = None) 
         peak_force_N=float(r.force_N[~r.hold].max()),
         strains={k: v.to_dict() for k, v in strains.items()}, pocket_closes_at_N=closes,
         interface_sensitivity=sens, floor_dead_band_N=dead, useful_sensors=useful,
-        wall_s=r.wall_s, n_dofs=r.n_dofs)
+        wall_s=r.wall_s, n_dofs=r.n_dofs,
+        curve={"displacement_mm": [float(f"{v:.5g}") for v in r.displacement_mm[~r.hold]],
+               "force_N": [float(f"{v:.5g}") for v in r.force_N[~r.hold]]})

@@ -6,6 +6,10 @@
   and the differences 3D - 2D; the paper's pocket2-sil beside them, run the same way.
 * ``pareto.png``: every trial's two objectives, the front, the 3D values of the winners, and
   pocket2-sil's lifelike distance.
+* ``curves.png``: each winner's force against indentation (2D and 3D) and pocket2-sil's,
+  against the human middle phalanges: the paper's means and SDs at 2 N (Little2, Ring2, Middle2,
+  flat and curled), its "more than 2 mm" at 1 N, and the human reference law through them
+  (`softhand.laws.references.human_law`).
 * ``stl/{rank}-{name}.stl``: each checked winner as a watertight solid for a mould
   (`softhand.design.stl`), with its checks in ``designs.json``.
 """
@@ -25,7 +29,8 @@ from softhand.design.stl import write_stl
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.parallel import run_tasks
 
-__all__ = ["BASELINE", "check_in_3d", "choose_winners", "plot_front", "write_outputs"]
+__all__ = ["BASELINE", "check_in_3d", "choose_winners", "plot_curves", "plot_front",
+           "write_outputs"]
 
 #: the paper's most lifelike design (pocket2-sil, Table 3's SIL, the default geometry)
 BASELINE = Candidate(outer_layer_mm=0.8, pocket_roof_mm=1.4, pocket_height_mm=2.0,
@@ -118,6 +123,55 @@ def plot_front(trials: list[dict[str, Any]], front: list[dict[str, Any]],
     plt.close(fig)
 
 
+def plot_curves(winners: list[dict[str, Any]], baseline: dict[str, Any], path: Path) -> None:
+    """Winners' ramps against the human corridors (module docstring)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softhand.laws.references import human_law
+    from softhand.paper import paper
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    law = human_law().source
+    d = np.linspace(0.0, np.log1p(2.2 / law["a_N"]) / law["b_per_mm"], 100)
+    ax.plot(d, law["a_N"] * np.expm1(law["b_per_mm"] * d), color="k", lw=2,
+            label="human reference law")
+    human = paper()["human_displacement_at_2N_mm"]
+    for i, (name, (mean, sd)) in enumerate((k, v) for k, v in human.items()
+                                           if isinstance(v, list)):
+        ax.errorbar(mean, 2.0 + 0.03 * (i - 2.5), xerr=sd, fmt="o", color="0.45", ms=4,
+                    capsize=2, label="paper, human 2 N: mean and SD" if i == 0 else None)
+        ax.annotate(name, (mean + sd, 2.0 + 0.03 * (i - 2.5)), fontsize=6, color="0.45",
+                    xytext=(3, -2), textcoords="offset points")
+    ax.axvspan(human["at_1N_more_than_mm"], 7.0, ymin=0, ymax=0.02, color="0.6")
+    ax.plot([human["at_1N_more_than_mm"]], [1.0], ">", color="0.45", ms=7,
+            label=f"paper, human 1 N: more than {human['at_1N_more_than_mm']:g} mm")
+    colours = plt.cm.tab10(np.arange(len(winners)))
+    for i, (w, c) in enumerate(zip(winners, colours, strict=True), 1):
+        ax.plot(w["curve"]["displacement_mm"], w["curve"]["force_N"], "--", color=c, lw=1)
+        c3 = w.get("check_3d")
+        if c3:
+            ax.plot(c3["curve"]["displacement_mm"], c3["curve"]["force_N"], "-", color=c, lw=2,
+                    label=f"{i}: {w['label']} (3D; dashed 2D)")
+    b3 = baseline.get("3d")
+    if b3:
+        ax.plot(b3["curve"]["displacement_mm"], b3["curve"]["force_N"], "-", color="tab:gray",
+                lw=1.5, label="pocket2-sil (3D)")
+    ax.set_xlabel("indentation (mm)")
+    ax.set_ylabel("force (N)")
+    ax.set_xlim(0, 5)
+    ax.set_ylim(0, 2.2)
+    ax.set_title("Winners against the human middle phalanges (plate, 0.5 mm/s)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    with atomic_open(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110)
+    plt.close(fig)
+
+
 def _fmt(v: float | None, f: str) -> str:
     return "" if v is None else format(v, f)
 
@@ -173,4 +227,6 @@ def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "defaul
     atomic_write_json(out / "designs.json", json.loads(json.dumps(data, default=float)))
     atomic_write_text(out / "designs.md", table_markdown(data) + "\n")
     plot_front(trials, front, checked["winners"], checked["baseline"], out / "pareto.png")
+    if all(w.get("check_3d") for w in checked["winners"]) and checked["baseline"]["3d"]:
+        plot_curves(checked["winners"], checked["baseline"], out / "curves.png")
     return data
