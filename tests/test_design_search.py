@@ -340,3 +340,21 @@ def test_trials_on_a_dask_cluster_are_the_local_trials(tmp_path):
     assert [t.params for t in remote.study.trials] == [t.params for t in local.study.trials]
     for a, b in zip(remote.study.trials, local.study.trials, strict=True):
         assert a.values == pytest.approx(b.values, rel=1e-9)
+
+
+def test_a_winners_fe_indent_line_runs_the_same_model(tmp_path):
+    """The line written for each winner, run by `softhand fe indent`, gives the evaluation's
+    curve (2D coarse here)."""
+    import shlex
+
+    from softhand.design.evaluate import fe_indent_command, fe_materials
+
+    cand = Candidate(**POCKET2, inner="ecoflex-00-30", outer="dragon-skin-10")
+    (tmp_path / "m.json").write_text(json.dumps(fe_materials(cand)))
+    line = fe_indent_command(cand, str(tmp_path / "m.json"), mode="2d")
+    args = shlex.split(line)[1:] + ["--mesh", "coarse", "--json"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    got = json.loads(r.output.strip().splitlines()[-1])
+    ev = evaluate(cand, screen_settings(mesh="coarse"))
+    assert got["displacement_at_2N_mm"] == pytest.approx(ev.displacement_mm[1], rel=1e-9)

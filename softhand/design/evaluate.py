@@ -38,7 +38,8 @@ from softhand.fem.strain import peak_strains
 from softhand.laws.lifelike import FORCES_N, distance_pct
 from softhand.sensors.criteria import AT_N, USEFUL
 
-__all__ = ["OBJECTIVES", "Evaluation", "evaluate", "screen_settings"]
+__all__ = ["OBJECTIVES", "Evaluation", "evaluate", "fe_design", "fe_indent_command",
+           "fe_materials", "screen_settings"]
 
 OBJECTIVES = ("lifelike_distance_pct", "durability_usage")
 
@@ -60,6 +61,21 @@ def fe_design(candidate: Candidate, settings: IndentationSettings
     else:
         design, mats = Design("pocket2", "sil", "pu"), {"sil": inner, "pu": outer}
     return design, replace(settings, materials=mats, geometry=candidate.overrides())
+
+
+def fe_indent_command(candidate: Candidate, materials_path: str, *, mode: str = "3d") -> str:
+    """The ``softhand fe indent`` line that runs ``candidate`` (the screen's ramp: no hold),
+    with `fe_materials` written to ``materials_path``."""
+    design, _ = fe_design(candidate, screen_settings())
+    geometry = " ".join(f"--geometry {k}={v:.6g}" for k, v in candidate.overrides().items())
+    return (f"softhand fe indent {design.name} --mode {mode} --hold 0 {geometry} "
+            f"--materials {materials_path}")
+
+
+def fe_materials(candidate: Candidate) -> dict[str, dict]:
+    """The ``--materials`` file of `fe_indent_command`: the library constants in the slots."""
+    _, s = fe_design(candidate, screen_settings())
+    return s.materials
 
 
 @dataclass(frozen=True)

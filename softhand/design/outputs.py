@@ -10,8 +10,10 @@
   against the human middle phalanges: the paper's means and SDs at 2 N (Little2, Ring2, Middle2,
   flat and curled), its "more than 2 mm" at 1 N, and the human reference law through them
   (`softhand.laws.references.human_law`).
-* ``stl/{rank}-{name}.stl``: each checked winner as a watertight solid for a mould
-  (`softhand.design.stl`), with its checks in ``designs.json``.
+* ``stl/{rank}-trial{n}.stl``: each checked winner as a watertight solid for a mould
+  (`softhand.design.stl`), with its checks in ``designs.json``; beside it
+  ``{rank}-trial{n}-materials.json``, with which the ``softhand fe indent`` line in
+  ``designs.json`` (``fe_indent``) runs the winner again.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from softhand.design.evaluate import evaluate, screen_settings
+from softhand.design.evaluate import evaluate, fe_indent_command, fe_materials, screen_settings
 from softhand.design.search import candidate_of, completed, pareto_evaluations
 from softhand.design.space import Candidate
 from softhand.design.stl import write_stl
@@ -221,6 +223,9 @@ def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "defaul
     for i, w in enumerate(checked["winners"], 1):
         cand = candidate_of(w)
         w["stl"] = write_stl(cand.geometry(), out / "stl" / f"{i}-trial{w['trial']}.stl")
+        mats = out / "stl" / f"{i}-trial{w['trial']}-materials.json"
+        atomic_write_json(mats, fe_materials(cand))
+        w["fe_indent"] = fe_indent_command(cand, str(mats))
     data = {**(extra or {}), "n_trials_complete": len(trials), "front": front,
             "winners": checked["winners"], "baseline": checked["baseline"],
             "check_interrupted": checked["interrupted"]}
