@@ -102,10 +102,10 @@ def markdown(data: dict) -> str:
             else 100 * (b3["displacement_mm"][1] / b2["displacement_mm"][1] - 1))
     lines.append(f"| pocket2-sil | {_f(b3['lifelike_distance_pct'] - b2['lifelike_distance_pct'], '+.1f')}"
                  f" | n/a | {_f(b_d2, '+.1f')} % | | |")
-    lines += ["", "The handshake's range: each winner on the 2D ramp to 20 N. The FE stops where it "
-              "finds no equilibrium (elements inverted under the plate: the soft skin squeezed "
-              "to about half its height), so durability at the handshake's 10-15 N peaks could "
-              "not be scored for these soft designs:", "",
+    lines += ["", "The handshake's range: each winner on the 2D ramp to 20 N. The FE stops where "
+              "Newton finds no equilibrium even at the smallest step (the soft skin squeezed to "
+              "about half its height; the messages are in the JSON), so durability at the "
+              "handshake's 10-15 N peaks could not be scored for these soft designs:", "",
               "| winner | force reached, N | plate travel there, mm | usage at 20 N |",
               "|---|---|---|---|"]
     for r in data.get("force_limits", []):
