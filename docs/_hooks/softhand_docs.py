@@ -251,6 +251,12 @@ def _observations() -> str:
     return observation_table(markdown=True) + "\n\n*Generated from `softhand.envs.spaces`.*"
 
 
+def _material_source(m) -> str:
+    if m.modulus_100_MPa is None:  # Table 3
+        return m.sources["hyperelastic"].split(";")[0]
+    return "datasheet fit: 100 % modulus and tensile strength (nu, Prony assumed)"
+
+
 def _materials() -> str:
     from softhand.fem.library import library
 
@@ -263,7 +269,7 @@ def _materials() -> str:
                     f"{', '.join(f'{v:.4g}' for v in c['alpha'])} | {c['nu']:g} | "
                     f"{num(m.elongation_at_break_pct, 'g')} | "
                     f"{num(m.tensile_strength_MPa, '.3g')} | {num(m.tear_strength_N_mm, '.3g')} | "
-                    f"{m.sources['hyperelastic'].split(' (')[0]} |")
+                    f"{_material_source(m)} |")
     return ("\n".join(rows) + "\n\n*Generated from `softhand/data/materials.json` "
             "(`softhand materials` prints every source).*")
 
