@@ -358,3 +358,16 @@ def test_a_winners_fe_indent_line_runs_the_same_model(tmp_path):
     got = json.loads(r.output.strip().splitlines()[-1])
     ev = evaluate(cand, screen_settings(mesh="coarse"))
     assert got["displacement_at_2N_mm"] == pytest.approx(ev.displacement_mm[1], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_pocket2_sil_in_3d_has_the_calibrated_skins_lifelike_distance():
+    """The search's 3D check of pocket2-sil (distance read off the FE ramp) against the shipped
+    skin's (from its fitted law, calibration/skins/index.json): the same within 0.5 pp."""
+    from softhand.design.outputs import BASELINE
+    from softhand.paths import SKINS_DIR
+
+    ev = evaluate(BASELINE, screen_settings(mode="3d"))
+    index = json.loads((SKINS_DIR / "index.json").read_text(encoding="utf-8"))
+    shipped = next(r["distance_pct"] for r in index["lifelike"] if r["name"] == "pocket2-sil")
+    assert ev.lifelike_distance_pct == pytest.approx(shipped, abs=0.5)
