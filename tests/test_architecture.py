@@ -1,8 +1,9 @@
 """The data flow of the design is the import graph: a stage imports only the stages before it.
 
-Stages, in order (docs/architecture.md): fem -> laws -> skin -> sensors (branching off the FE) -> hands
--> envs -> viz, then the benchmarks and the command line above them all. The base modules (paths,
-io, validate, paper, parallel, warn, compiled, the package itself) may be imported by every stage.
+Stages, in order (docs/architecture.md): fem -> laws -> skin -> sensors (branching off the FE) ->
+design (the design search) -> hands -> envs -> viz, then the benchmarks and the command line above
+them all. The base modules (paths, io, validate, paper, parallel, warn, compiled, the package
+itself) may be imported by every stage.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import ast
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "softhand"
-ORDER = ("fem", "laws", "skin", "sensors", "hands", "envs", "viz", "bench", "cli")
+ORDER = ("fem", "laws", "skin", "sensors", "design", "hands", "envs", "viz", "bench", "cli")
 BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "compiled", "data"}
 CLI = {"cli"}
 

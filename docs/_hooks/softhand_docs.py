@@ -11,7 +11,8 @@ Three jobs, each so that a number on a page is read from the file that measured 
 - A line ``<!-- softhand:NAME -->`` is replaced by a table generated from the shipped data or a
   report at build time (``GENERATED`` lists them): the paper comparison from
   ``calibration/fe/summary.json``, the lifelike ranking from ``calibration/skins/index.json``, the
-  population from ``reports/population-*.json``, the command reference from the CLI itself, the
+  population from ``reports/population-*.json``, the material library from
+  ``softhand/data/materials.json``, the command reference from the CLI itself, the
   env's action and observation tables from ``softhand.envs.spaces`` (the names the env gives).
 """
 
@@ -250,7 +251,31 @@ def _observations() -> str:
     return observation_table(markdown=True) + "\n\n*Generated from `softhand.envs.spaces`.*"
 
 
+def _material_source(m) -> str:
+    if m.modulus_100_MPa is None:  # Table 3
+        return m.sources["hyperelastic"].split(";")[0]
+    return "datasheet fit: 100 % modulus and tensile strength (nu, Prony assumed)"
+
+
+def _materials() -> str:
+    from softhand.fem.library import library
+
+    rows = ["| material | Shore | mu_i MPa | alpha_i | nu | elongation at break % | tensile MPa | "
+            "tear N/mm | hyperelastic constants from |", "|---|---|---|---|---|---|---|---|---|"]
+    for m in library().values():
+        c = m.constants
+        num = (lambda v, f: "n/a" if v is None else format(v, f))  # noqa: E731
+        rows.append(f"| {m.name} | {m.shore} | {', '.join(f'{v:.4g}' for v in c['mu_MPa'])} | "
+                    f"{', '.join(f'{v:.4g}' for v in c['alpha'])} | {c['nu']:g} | "
+                    f"{num(m.elongation_at_break_pct, 'g')} | "
+                    f"{num(m.tensile_strength_MPa, '.3g')} | {num(m.tear_strength_N_mm, '.3g')} | "
+                    f"{_material_source(m)} |")
+    return ("\n".join(rows) + "\n\n*Generated from `softhand/data/materials.json` "
+            "(`softhand materials` prints every source).*")
+
+
 GENERATED: dict[str, Callable[[], str]] = {
+    "materials": _materials,
     "paper-agreement": _paper_agreement,
     "paper-details": _paper_details,
     "lifelike": _lifelike,

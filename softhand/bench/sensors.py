@@ -36,13 +36,12 @@ from softhand.fem import solver
 from softhand.fem.solver import IndentationSettings
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
 from softhand.paths import REPORTS_DIR, SENSORS_DIR, SKINS_DIR
+from softhand.sensors.criteria import AT_N, USEFUL
 from softhand.sensors.transfer import SensorRecord, record_from_result
 
 __all__ = ["record_row", "run_sensor_table", "sensor_row"]
 
 PLACEMENT_ORDER = ("bone", "interface", "pocket-floor")
-USEFUL = {"sensitivity_min": 0.1, "dead_band_max_N": 0.5, "relaxation_max_pct": 10.0}
-AT_N = 2.0
 HANDSHAKE_DESIGN = "pocket2-sil"
 
 

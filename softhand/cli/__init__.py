@@ -14,6 +14,9 @@
 ``softhand bench flex``         the flex region on the hand against the flex rig and the FE
 ``softhand bench sensors``      embedded sensors: the design table, transfer curves, the handshake
 ``softhand sensors calibrate``  FE sensor records and transfer laws per design and placement
+``softhand materials``         the material library with the source of every number
+``softhand design search``     the design search: optuna over pockets, layers and materials, 2D screen, 3D check, STL
+``softhand design samplers``   multivariate TPE against NSGA-II on one budget (a report)
 
 Every argument and input file is checked before any work starts. Exit status:
 
@@ -36,7 +39,17 @@ it only when the run completes (`softhand.io.staged_folder`).
 
 from __future__ import annotations
 
-from softhand.cli import bench, calibrate, fe, handshake, population, sensors, skin  # noqa: F401
+from softhand.cli import (  # noqa: F401
+    bench,
+    calibrate,
+    design,
+    fe,
+    handshake,
+    materials,
+    population,
+    sensors,
+    skin,
+)
 from softhand.cli.app import (
     EXIT_CONVERGENCE,
     EXIT_INTERRUPTED,

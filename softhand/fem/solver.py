@@ -216,6 +216,9 @@ class IndentationResult:
             ``force_N`` and ``displacement_mm`` of that state. Empty if the ramp took no step.
         linear_solver: the sparse solver of the Newton steps (``"pardiso"``, ``"cholmod"``, or
             ``"superlu"`` on the NumPy engine).
+        ramp_end_u: the nodal displacements (mm, the modelled part's DOFs in the mesh's order)
+            at the end of the ramp, the largest force reached: what strains at the peak are read
+            from (`softhand.fem.strain`). None if the ramp took no step.
     """
 
     design: str
@@ -233,6 +236,7 @@ class IndentationResult:
     contact_area_mm2: np.ndarray | None = None
     plate_pressure: dict[str, Any] = field(default_factory=dict)
     linear_solver: str = ""
+    ramp_end_u: np.ndarray | None = None
 
     def displacement_at(self, force_N: float) -> float | None:
         """Plate displacement (mm) where the ramp first reaches ``force_N``, or None."""
@@ -585,8 +589,10 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
         if progress:
             progress(0.8 * min(1.0, max(F / s.max_force_N, d / s.max_depth_mm)))
 
+    ramp_end_u = None
     if len(times) > 1:
         pressure = model.plate_pressure(u, d, F)
+        ramp_end_u = u.copy()
     # --- hold ----------------------------------------------------------------------------
     if do_hold:
         t_end = t + s.hold_s
@@ -625,5 +631,5 @@ def _run(design: Design, s: IndentationSettings, model: _Model, t_start: float,
                                     "force_N": np.array(readings[p.label])}
                           for p in model.sensors.patches},
         contact_area_mm2=np.array(areas), plate_pressure=pressure,
-        linear_solver=model.linear_solver(),
+        linear_solver=model.linear_solver(), ramp_end_u=ramp_end_u,
     )

@@ -17,7 +17,7 @@ import numpy as np
 from softhand.laws.fit import SkinLaw
 from softhand.laws.references import PROSTHETIC, human_law, prosthetic_law
 
-__all__ = ["LifelikeRow", "lifelike_ranking"]
+__all__ = ["LifelikeRow", "distance_pct", "human_displacements_mm", "lifelike_ranking"]
 
 FORCES_N = (1.0, 2.0)
 
@@ -37,16 +37,28 @@ class LifelikeRow:
                 "better_than_prosthetic": self.better_than_prosthetic}
 
 
+def human_displacements_mm() -> tuple[float, ...]:
+    """The human reference's indentation (mm) at each of `FORCES_N` in the paper's ramp."""
+    human = human_law()
+    return tuple(human.quasi_static_displacement_at(f) for f in FORCES_N)
+
+
+def distance_pct(displacements_mm, human_mm: tuple[float, ...] | None = None) -> float:
+    """The lifelike distance (module docstring) of a skin's indentation at `FORCES_N`, e.g. read
+    off an FE ramp at 0.5 mm/s (the design search) or from a fitted law (`lifelike_ranking`)."""
+    h = np.asarray(human_displacements_mm() if human_mm is None else human_mm)
+    rel = (np.asarray(displacements_mm, dtype=float) - h) / h
+    return float(100 * np.sqrt(np.mean(rel**2)))
+
+
 def _row(law: SkinLaw, human: tuple[float, ...]) -> tuple[tuple[float, ...], float]:
     d = tuple(law.quasi_static_displacement_at(f) for f in FORCES_N)
-    rel = (np.asarray(d) - np.asarray(human)) / np.asarray(human)
-    return d, float(100 * np.sqrt(np.mean(rel**2)))
+    return d, distance_pct(d, human)
 
 
 def lifelike_ranking(laws: dict[str, SkinLaw]) -> list[LifelikeRow]:
     """Rank ``laws`` (and the commercial baseline) by distance from the human phalanx."""
-    human = human_law()
-    h = tuple(human.quasi_static_displacement_at(f) for f in FORCES_N)
+    h = human_displacements_mm()
     all_laws = dict(laws)
     all_laws.setdefault(PROSTHETIC, prosthetic_law())
     rows = {name: _row(law, h) for name, law in all_laws.items()}

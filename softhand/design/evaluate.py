@@ -1,0 +1,188 @@
+"""The objectives of one candidate, each read off one FE run (`softhand.fem.solver.indent`).
+
+The run is the paper's test on the candidate: the plate at 0.5 mm/s to ``max_force_N`` (2 N, the
+paper's, by default), Prony relaxation during the ramp, no hold; 2D plane strain for the screen,
+the 3D quarter model for the check. The library materials go in through the FE's one way of
+replacing constants (`IndentationSettings.materials`): the inner material in Table 3's ``sil``
+slot, the outer in ``pu`` (the run's design name, ``pocket2-sil-pu``, is only the slot layout).
+
+Objectives (both minimised):
+
+1. **lifelike distance** (`softhand.laws.lifelike.distance_pct`): RMS relative difference of the
+   indentation at 1 N and 2 N on this ramp from the human middle phalanx (the paper's 2 N means,
+   flat and curled, and the 1 N point), in %.
+2. **durability usage** (`softhand.fem.strain`): the largest, over the two layers, peak maximum
+   principal strain at the largest force reached / that material's elongation at break.
+
+Reported beside them: whether and at which force the pocket closes (the roof touches the floor:
+the curve stiffens), the peak strains per layer, and sensor usefulness by softhand's criteria
+(`softhand.sensors.criteria`): the sensitivity of the patch under the outer layer at 2 N (a
+sensor at the outer layer's depth) and the pocket floor's dead band (the plate force at which its
+reading starts, bracketed by the FE's steps). It is not an objective: the ramp has no hold, so the
+criteria's relaxation part is not evaluated, and the dead band is the FE's bracket, not a fitted
+transfer law.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from softhand.design.space import Candidate
+from softhand.fem.geometry import Design
+from softhand.fem.library import library
+from softhand.fem.solver import IndentationResult, IndentationSettings, indent
+from softhand.fem.strain import peak_strains
+from softhand.laws.lifelike import FORCES_N, distance_pct
+from softhand.sensors.criteria import AT_N, USEFUL
+
+__all__ = ["OBJECTIVES", "Evaluation", "evaluate", "fe_design", "fe_indent_command",
+           "fe_materials", "screen_settings"]
+
+OBJECTIVES = ("lifelike_distance_pct", "durability_usage")
+
+
+def screen_settings(*, mode: str = "2d", mesh: str = "default", max_force_N: float = 2.0,
+                    threads: int = 1) -> IndentationSettings:
+    """The run of every candidate: the paper's ramp, no hold (see the module docstring)."""
+    return IndentationSettings(mode=mode, mesh=mesh, max_force_N=max_force_N, hold_s=0.0,
+                               threads=threads)
+
+
+def fe_design(candidate: Candidate, settings: IndentationSettings
+              ) -> tuple[Design, IndentationSettings]:
+    """The FE design and settings that run ``candidate`` (slots: module docstring)."""
+    lib = library()
+    inner, outer = lib[candidate.inner].constants, lib[candidate.outer].constants
+    if candidate.inner == candidate.outer:
+        design, mats = Design("pocket2", "sil", "sil"), {"sil": inner}
+    else:
+        design, mats = Design("pocket2", "sil", "pu"), {"sil": inner, "pu": outer}
+    return design, replace(settings, materials=mats, geometry=candidate.overrides())
+
+
+def fe_indent_command(candidate: Candidate, materials_path: str, *, mode: str = "3d") -> str:
+    """The ``softhand fe indent`` line that runs ``candidate`` (the screen's ramp: no hold),
+    with `fe_materials` written to ``materials_path``."""
+    design, _ = fe_design(candidate, screen_settings())
+    geometry = " ".join(f"--geometry {k}={v:.6g}" for k, v in candidate.overrides().items())
+    return (f"softhand fe indent {design.name} --mode {mode} --hold 0 {geometry} "
+            f"--materials {materials_path}")
+
+
+def fe_materials(candidate: Candidate) -> dict[str, dict]:
+    """The ``--materials`` file of `fe_indent_command`: the library constants in the slots."""
+    _, s = fe_design(candidate, screen_settings())
+    return s.materials
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """What one FE run says about one candidate (module docstring).
+
+    Attributes:
+        candidate: the design.
+        mode, mesh: the run's model.
+        displacement_mm: indentation at each of `FORCES_N` (None: not reached).
+        lifelike_distance_pct: objective 1 (None when a force was not reached).
+        durability_usage: objective 2 (None when a material has no elongation at break).
+        peak_force_N: the largest force reached (the ramp's end).
+        strains: per layer the `LayerStrain` as a dict.
+        pocket_closes_at_N: plate force at the first step with the roof on the floor (None: open).
+        interface_sensitivity: reading under the outer layer per newton of plate force at 2 N.
+        floor_dead_band_N: plate force bracket [before, at] where the pocket floor's reading starts.
+        useful_sensors: placements that meet the criteria that a ramp can test.
+        wall_s: the FE run's wall time.
+        n_dofs: model size.
+        curve: the ramp, ``{"displacement_mm": [...], "force_N": [...]}`` (5 significant digits).
+    """
+
+    candidate: Candidate
+    mode: str
+    mesh: str
+    displacement_mm: tuple[float | None, ...]
+    lifelike_distance_pct: float | None
+    durability_usage: float | None
+    peak_force_N: float
+    strains: dict[str, dict] = field(default_factory=dict)
+    pocket_closes_at_N: float | None = None
+    interface_sensitivity: float | None = None
+    floor_dead_band_N: list[float] | None = None
+    useful_sensors: tuple[str, ...] = ()
+    wall_s: float = 0.0
+    n_dofs: int = 0
+    curve: dict[str, list[float]] = field(default_factory=dict)
+
+    @property
+    def objectives(self) -> tuple[float | None, float | None]:
+        return self.lifelike_distance_pct, self.durability_usage
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"candidate": self.candidate.to_dict(), "label": self.candidate.label,
+                "mode": self.mode, "mesh": self.mesh, "forces_N": list(FORCES_N),
+                "displacement_mm": list(self.displacement_mm),
+                "lifelike_distance_pct": self.lifelike_distance_pct,
+                "durability_usage": self.durability_usage, "peak_force_N": self.peak_force_N,
+                "strains": self.strains, "pocket_closes_at_N": self.pocket_closes_at_N,
+                "interface_sensitivity": self.interface_sensitivity,
+                "floor_dead_band_N": self.floor_dead_band_N,
+                "useful_sensors": list(self.useful_sensors), "wall_s": self.wall_s,
+                "n_dofs": self.n_dofs, "curve": self.curve}
+
+
+def _sensors(r: IndentationResult) -> tuple[float | None, list[float] | None, tuple[str, ...]]:
+    ramp = ~r.hold
+    f = r.force_N[ramp]
+    sens = dead = None
+    useful = []
+    for name, s in r.embedded_sensors.items():
+        reading = np.asarray(s["force_N"])[ramp]
+        if s["placement"] == "interface" and f[-1] >= AT_N * (1 - 1e-6):
+            sens = float(np.interp(AT_N, f, reading)) / AT_N
+            if sens >= USEFUL["sensitivity_min"]:
+                useful.append(name)
+        if s["placement"] == "pocket-floor":
+            on = np.flatnonzero(reading > 1e-9)
+            if on.size and on[0] > 0:
+                dead = [float(f[on[0] - 1]), float(f[on[0]])]
+                if dead[1] <= USEFUL["dead_band_max_N"]:
+                    useful.append(name)
+    return sens, dead, tuple(useful)
+
+
+def evaluate(candidate: Candidate, settings: IndentationSettings | None = None) -> Evaluation:
+    """Run ``candidate`` and score it (module docstring).
+
+    Raises:
+        ValueError: a candidate that breaks a manufacturability or geometry rule (named).
+        ConvergenceError: the FE found no equilibrium (a design too soft for the force).
+    """
+    candidate.check()
+    design, s = fe_design(candidate, settings or screen_settings())
+    r = indent(design, s)
+    d = tuple(r.displacement_at(f) for f in FORCES_N)
+    life = None if any(v is None for v in d) else distance_pct(d)
+    strains = peak_strains(r, design)
+    lib = library()
+    usage = []
+    for layer, mat in (("inner", candidate.inner), ("outer", candidate.outer)):
+        eb = lib[mat].elongation_at_break_pct
+        if layer in strains and eb is not None:
+            usage.append(strains[layer].max_principal_strain / (eb / 100.0))
+        elif layer in strains:
+            usage = None
+            break
+    closes = next((rec["force_N"] for rec in r.log
+                   if rec["phase"] == "ramp" and rec["pocket_points"] > 0), None)
+    sens, dead, useful = _sensors(r)
+    return Evaluation(
+        candidate=candidate, mode=s.mode, mesh=str(s.mesh), displacement_mm=d,
+        lifelike_distance_pct=life, durability_usage=None if usage is None else max(usage),
+        peak_force_N=float(r.force_N[~r.hold].max()),
+        strains={k: v.to_dict() for k, v in strains.items()}, pocket_closes_at_N=closes,
+        interface_sensitivity=sens, floor_dead_band_N=dead, useful_sensors=useful,
+        wall_s=r.wall_s, n_dofs=r.n_dofs,
+        curve={"displacement_mm": [float(f"{v:.5g}") for v in r.displacement_mm[~r.hold]],
+               "force_N": [float(f"{v:.5g}") for v in r.force_N[~r.hold]]})
