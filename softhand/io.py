@@ -16,13 +16,14 @@ import shutil
 import signal
 import tempfile
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["DeferredInterrupt", "Staged", "atomic_open", "atomic_write_json", "atomic_write_text", "check_free_space",
-           "check_writable_dir", "check_writable_file", "interrupts_deferred", "read_json",
-           "staged_folder"]
+__all__ = ["DeferredInterrupt", "Staged", "StaleStageWarning", "atomic_open", "atomic_write_json",
+           "atomic_write_text", "check_free_space", "check_writable_dir", "check_writable_file",
+           "interrupts_deferred", "read_json", "remove_stale_stages", "staged_folder"]
 
 #: Longest file or folder name (bytes) and path that Linux and macOS file systems take
 NAME_MAX, PATH_MAX = 255, 4096
@@ -218,11 +219,69 @@ class Staged:
             if self.target.exists():
                 old = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.old-",
                                             dir=self.target.parent))
+                (old / _OWNER).write_text(str(os.getpid()), encoding="utf-8")
                 os.rename(self.target, old / self.target.name)
             os.rename(self.path, self.target)
             self.committed = True
             if old is not None:
                 shutil.rmtree(old, ignore_errors=True)
+
+
+#: the file in a staging folder that names the process writing it
+_OWNER = "owner.pid"
+
+
+class StaleStageWarning(UserWarning):
+    """A staging folder left beside a set by a run that was killed (kill -9, a power cut) was
+    removed by the next run that writes there."""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process: alive
+        return True
+    return True
+
+
+def remove_stale_stages(target: str | os.PathLike) -> list[Path]:
+    """Remove the staging folders ``.{name}.new-*`` and ``.{name}.old-*`` beside ``target`` that
+    no live process owns (a run killed before it could clean up: `staged_folder` removes its
+    own otherwise), each with a `StaleStageWarning`; return them. A folder whose owner still
+    runs (a concurrent run writing there) is left alone; an ``old`` one that holds the set
+    while ``target`` is missing (a run killed between a commit's two renames) gives it back
+    first."""
+    import warnings
+
+    target = Path(os.fspath(target))
+    removed = []
+    if not target.parent.is_dir():
+        return removed
+    for kind in ("new", "old"):
+        for stage in sorted(target.parent.glob(f".{target.name}.{kind}-*")):
+            if not stage.is_dir():
+                continue
+            try:
+                pid = int((stage / _OWNER).read_text(encoding="utf-8").strip())
+            except (OSError, ValueError):
+                pid = None
+            if pid is not None and pid != os.getpid() and _alive(pid):
+                continue
+            if pid is None and time.time() - stage.stat().st_mtime < 60.0:
+                continue  # being made this moment: its owner writes owner.pid next
+            if kind == "old" and not target.exists() and (stage / target.name).is_dir():
+                # killed between the two renames of a commit: the earlier set is put back
+                os.rename(stage / target.name, target)
+                warnings.warn(f"put back {target} from {stage}, where a run killed while it "
+                              "swapped in its new set had left it", StaleStageWarning,
+                              stacklevel=2)
+            shutil.rmtree(stage, ignore_errors=True)
+            removed.append(stage)
+            warnings.warn(f"removed {stage}, a staging folder of {target.name} that an earlier "
+                          "run left when it was killed", StaleStageWarning, stacklevel=2)
+    return removed
 
 
 @contextlib.contextmanager
@@ -240,7 +299,9 @@ def staged_folder(target: str | os.PathLike, *, stage: bool) -> Iterator[Staged]
         yield Staged(target, target)
         return
     target.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_stages(target)
     holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.new-", dir=target.parent))
+    (holder / _OWNER).write_text(str(os.getpid()), encoding="utf-8")
     path = holder / target.name
     try:
         if target.exists():

@@ -16,3 +16,13 @@ os.environ[CACHE_ENV] = _CACHE
 
 def pytest_sessionfinish(session, exitstatus):
     shutil.rmtree(_CACHE, ignore_errors=True)
+
+
+def sigint_default() -> None:
+    """``preexec_fn`` of a child that a test interrupts: SIGINT at its default, so that Python
+    installs its KeyboardInterrupt handler in the child even when this run's parent ignores
+    SIGINT (nohup, ``trap '' INT``, background jobs, some CI runners), whose children inherit
+    the ignoring disposition."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -5,6 +5,7 @@ are checked, and the commands run on stand-in results."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from types import SimpleNamespace
@@ -215,3 +216,30 @@ def test_the_command_line_imports_no_mujoco_before_render_chooses_its_gl():
                           "print('mujoco' in sys.modules)"], env=env, capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "False", out.stdout
+
+
+def test_an_incomplete_population_never_replaces_an_earlier_complete_set(stand_in_partners,
+                                                                         monkeypatch, tmp_path):
+    """A complete population in --out, then the same command where one handshake fails: the
+    earlier complete set stays byte for byte, the finished partners go beside it
+    (OUT.incomplete), and the closing line says both (exit 3)."""
+    import softhand.envs.population
+
+    out = tmp_path / "pop"
+    args = ["population", "--n", "4", "--seed", "7", "--workers", "1", "--out", str(out)]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+    good = softhand.envs.population.run_partner
+
+    def fails_once(partner, settings):
+        if partner.index == 2:
+            raise RuntimeError("the physics diverged")
+        return good(partner, settings)
+
+    monkeypatch.setattr(softhand.envs.population, "run_partner", fails_once)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 3, res.output
+    assert {f.name: f.read_bytes() for f in out.iterdir()} == before
+    partial = json.loads((tmp_path / "pop.incomplete" / "results.json").read_text())
+    assert len(partial["partners"]) == 3 and partial["settings"]["missing"]
+    assert "earlier complete set kept" in res.output and "pop.incomplete" in res.output

@@ -22,6 +22,7 @@ import warnings
 
 import pytest
 from click.testing import CliRunner
+from conftest import sigint_default
 
 import softhand.parallel
 from softhand.cli import main
@@ -206,7 +207,8 @@ def test_ctrl_c_keeps_the_finished_task_and_drops_the_running_one(cluster, tmp_p
         sys.exit(130 if out.interrupted else 0)
     """))
     proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=sigint_default)
     seen = ""
     while "done fast" not in seen:
         ch = proc.stdout.read(1)

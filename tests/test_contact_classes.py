@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
@@ -192,3 +194,32 @@ def test_class_laws_only_refuses_what_it_cannot_do(tmp_path, args, needle):
                                     str(tmp_path / "skins")])
     assert res.exit_code == 2 and needle in res.output, res.output
     assert not (tmp_path / "skins").exists() or not any((tmp_path / "skins").iterdir())
+
+
+def test_class_laws_only_refuses_an_fe_folder_without_the_class_curves(tmp_path):
+    """An FE folder with the plate curves and their summary but no class folders: the refit
+    would write pocket2-sil.json without its pair_laws (every skin pair then falls back to the
+    plate law); it is refused before any work, naming each missing class curve, and the file in
+    --out is left as it was."""
+    import shutil
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+    from softhand.paths import FE_DIR, SKINS_DIR
+
+    fe, out = tmp_path / "fe", tmp_path / "skins"
+    fe.mkdir()
+    out.mkdir()
+    for f in [*Path(FE_DIR).glob("*.csv"), Path(FE_DIR) / "summary.json"]:
+        shutil.copy(f, fe / f.name)
+    shutil.copy(SKINS_DIR / "pocket2-sil.json", out / "pocket2-sil.json")
+    before = (out / "pocket2-sil.json").read_bytes()
+    res = CliRunner().invoke(main, ["calibrate", "pocket2-sil", "--class-laws-only", "--fe-dir",
+                                    str(fe), "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    for key, folder in (("phalanx/finger", "finger"), ("palm/flat", "palm-plate"),
+                        ("palm/finger", "palm-finger")):
+        assert f"{key} ({fe / folder / 'pocket2-sil.csv'})" in res.output, res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert (out / "pocket2-sil.json").read_bytes() == before

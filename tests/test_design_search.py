@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import sigint_default
 
 from softhand.cli import main
 from softhand.design.evaluate import evaluate, screen_settings
@@ -301,7 +302,8 @@ def test_ctrl_c_keeps_the_journal_and_resume_continues_the_study(tmp_path):
     cmd = [sys.executable, "-m", "softhand.cli", "design", "search", "--mesh", "coarse",
            "--out", str(out), "--check", "0", "--materials", "dragon-skin-10"]
     proc = subprocess.Popen([*cmd, "--trials", "500"], start_new_session=True, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=sigint_default)
     seen = ""
     while " 3/500" not in seen:
         ch = proc.stderr.read(1)

@@ -148,3 +148,23 @@ def test_every_report_is_included_on_a_page():
     included = "\n".join(p.read_text(encoding="utf-8") for p in PAGES)
     for report in sorted((ROOT / "reports").glob("*.md")):
         assert f'--8<-- "reports/{report.name}"' in included, report.name
+
+
+def test_the_pair_and_geom_counts_in_the_docs_are_the_shipped_scenes():
+    """docs/handshake.md and models/mjcf/README.md state the shipped scene's pair count and its
+    skin and tissue geom counts; they must be the model's (they once said 399, 323 and 304)."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(str(ROOT / "models" / "mjcf" / "handshake_scene.xml"))
+    names = [model.geom(g).name for g in range(model.ngeom)]
+    skins = sum(n.startswith("pro_skin_") for n in names)
+    tissues = sum(n.startswith("hum_tissue_") for n in names)
+    assert skins * tissues == model.npair
+    page = (ROOT / "docs" / "handshake.md").read_text(encoding="utf-8")
+    assert (f"each of the prosthetic's {skins} skin geoms" in page
+            and f"each of the partner's {tissues} tissue geoms" in page
+            and f"`<pair>` ({model.npair} pairs)" in page.replace("\n  ", " "))
+    models = (ROOT / "models" / "mjcf" / "README.md").read_text(encoding="utf-8")
+    assert f"{model.npair} in all" in models
+    counts = {int(n) for n in re.findall(r"(\d+) in all", models)}
+    assert counts == {model.npair}, counts

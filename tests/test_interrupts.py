@@ -17,13 +17,14 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import sigint_default
 
 HANG_S = 60
 
 
 def _start(args: list[str], **kw) -> subprocess.Popen:
     return subprocess.Popen(args, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, **kw)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default, **kw)
 
 
 def _interrupt_when(proc: subprocess.Popen, stream, marker: str) -> tuple[str, str]:
@@ -194,3 +195,42 @@ def test_a_ctrl_c_held_while_writing_says_the_files_were_written(tmp_path):
         "interrupted (Ctrl-C) while writing: what had finished was written, each file whole")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
     assert "Traceback" not in proc.stderr
+
+
+def test_a_staging_folder_left_by_a_killed_run_is_removed_by_the_next(tmp_path):
+    """kill -9 during a staged write leaves ``.NAME.new-*`` beside the set (nothing can clean
+    up); the next staged write there removes it with a warning, keeps a live run's, and puts
+    the set back when a run was killed between a commit's two renames."""
+    import subprocess
+    import warnings
+
+    from softhand.io import StaleStageWarning, remove_stale_stages, staged_folder
+
+    target = tmp_path / "skins"
+    target.mkdir()
+    (target / "a.json").write_text("old", encoding="utf-8")
+    proc = subprocess.Popen(["sleep", "0"])
+    proc.wait()
+    killed = tmp_path / ".skins.new-killed"
+    (killed / "skins").mkdir(parents=True)
+    (killed / "owner.pid").write_text(str(proc.pid), encoding="utf-8")
+    live = tmp_path / ".skins.new-live"
+    live.mkdir()
+    (live / "owner.pid").write_text(str(os.getppid()), encoding="utf-8")
+    with (pytest.warns(StaleStageWarning, match="skins.new-killed"),
+          staged_folder(target, stage=True) as staged):
+        (staged.path / "a.json").write_text("new", encoding="utf-8")
+        staged.commit()
+    assert not killed.exists() and live.exists()
+    assert (target / "a.json").read_text(encoding="utf-8") == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".skins.new-live", "skins"]
+    # killed between the renames: the set sits in .skins.old-*, skins/ is gone
+    old = tmp_path / ".skins.old-killed"
+    old.mkdir()
+    (old / "owner.pid").write_text(str(proc.pid), encoding="utf-8")
+    os.rename(target, old / "skins")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        remove_stale_stages(target)
+    assert (target / "a.json").read_text(encoding="utf-8") == "new" and not old.exists()
+    assert any("put back" in str(w.message) for w in caught)

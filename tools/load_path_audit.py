@@ -203,7 +203,6 @@ def who_loads(hand: str = "prosthetic", seed: int = 0) -> dict:
 
     import softhand.envs  # noqa: F401
     from softhand.envs.controllers import make_controller
-
     from softhand.envs.run import ContactAreas
 
     env = gym.make("softhand/Handshake-v0", hand=hand).unwrapped

@@ -156,13 +156,19 @@ def _writing(out: Path, kept: str) -> Iterator[None]:
 
 
 def _end_of_batch(what: str, written: int, total: int, out: Path, missing: dict[str, str],
-                  interrupted: bool, *, staged: bool = False) -> None:
+                  interrupted: bool, *, staged: bool = False, beside: list[Path] = ()) -> None:
     """One closing line for a batch that did not finish whole (exit 130 or 3); else nothing.
 
-    ``staged``: the run wrote shipped data beside it, so the incomplete set was dropped."""
+    ``staged``: the run wrote shipped data beside it, so the incomplete set was dropped;
+    ``beside``: the folders where an incomplete set went because its folder held an earlier
+    set, which it does not replace."""
     where = (f"the shipped set in {out} is unchanged (an incomplete run never replaces it; the "
              f"{written} finished {what} were dropped: --out DIR keeps them)" if staged
              else f"wrote {written} of {total} {what} to {out}")
+    if beside:
+        where += (f" (the earlier complete set{'s' if len(beside) > 1 else ''} kept, an "
+                  "incomplete run never replaces one: the finished ones are in "
+                  + ", ".join(str(b) for b in beside) + ")")
     if interrupted:
         raise Stopped(f"interrupted ({_STOP['by']}): {where}; missing: {', '.join(missing)}",
                       EXIT_INTERRUPTED)

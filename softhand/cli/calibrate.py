@@ -20,9 +20,11 @@ from softhand.paths import FE_DIR, SKINS_DIR, is_shipped
 
 
 def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
-    """--class-laws-only: each skin's file in --out with a soft contact, and its class folders
-    in --fe-dir readable and of the plate folder's settings, before the first fit."""
+    """--class-laws-only: each skin's file in --out with a soft contact, and the curve of every
+    contact class in --fe-dir's class folders, readable and of the plate folder's settings,
+    before the first fit (a refit without them would write files without their class laws)."""
     from softhand.skin.calibrate import class_folders
+    from softhand.skin.contact_classes import CLASSES, FE_FOLDERS, PLATE_CLASS, class_curve
     from softhand.skin.files import load_calibration
 
     for n in names:
@@ -31,9 +33,16 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         except ValueError as exc:
             bad(f"--out {str(out)!r}: {exc}")
         try:
-            class_folders(n, fe_dir)
+            found = class_folders(n, fe_dir)
         except ValueError as exc:
             bad(f"--fe-dir {fe_dir!r}: {exc}")
+        missing = [k for k in CLASSES if k != PLATE_CLASS and k not in found]
+        if missing:
+            bad(f"--fe-dir {fe_dir!r}: no curve of {n} for the contact classes "
+                + ", ".join(f"{k} ({class_curve(n, k, fe_dir)})" for k in missing)
+                + "; --class-laws-only needs every class folder ("
+                + ", ".join(f"{FE_FOLDERS[k]}/" for k in CLASSES if k != PLATE_CLASS)
+                + "), as `softhand fe sweep --indenter ... --body ...` writes them")
 
 
 @main.command("calibrate")

@@ -104,7 +104,7 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
                           on_done=lambda key, ok: (done.append(key),
                                                    update(len(done) / len(tasks))))
     command = "softhand population " + " ".join(sys.argv[2:])
-    listed, missing_all = [], {}
+    listed, missing_all, beside = [], {}, []
     with interrupts_deferred():  # what finished is written whole, Ctrl-C or not
         revision = git_revision()
         for k, ((design, controller), name) in enumerate(zip(combos, names, strict=True)):
@@ -120,8 +120,12 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
                     "version": __version__, "git_revision": revision, "command": command}
             summary = {}
             if results:
-                summary = _write_population(out / name if sweep else out, partners, results,
-                                            meta)
+                target = out / name if sweep else out
+                if missing and (target / "results.json").exists():
+                    # an incomplete run never replaces an earlier set: it goes beside it
+                    target = target.with_name(f"{target.name}.incomplete")
+                    beside.append(target)
+                summary = _write_population(target, partners, results, meta)
                 if sweep:
                     click.echo(f"{name}: {len(results)} of {n} partners")
                 _print_population(summary)
@@ -135,7 +139,7 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
                  "combinations": listed, "version": __version__, "git_revision": revision,
                  "command": command}, indent=1))
     _end_of_batch("handshakes" if sweep else "partners", len(batch.results), len(tasks), out,
-                  missing_all, batch.interrupted)
+                  missing_all, batch.interrupted, beside=beside)
     wall = sum(r["wall_s"] for r in batch.results.values())
     files = "partners.json, results.json, results.csv and fig4.png"
     click.echo(f"wrote {files} to {out} ({wall:.0f} s of handshakes)" if not sweep else
