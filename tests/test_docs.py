@@ -168,3 +168,25 @@ def test_the_pair_and_geom_counts_in_the_docs_are_the_shipped_scenes():
     assert f"{model.npair} in all" in models
     counts = {int(n) for n in re.findall(r"(\d+) in all", models)}
     assert counts == {model.npair}, counts
+
+
+def test_the_controllers_page_has_the_phases_and_their_times():
+    """docs/controllers.md lists every phase with the default timeline's start and end (a first
+    controller written from the docs closed during the reach and held 0 N)."""
+    from softhand.envs.partner import PHASES, Timeline
+
+    rows = _table((ROOT / "docs" / "controllers.md").read_text(encoding="utf-8"),
+                  "| phase | from s |")
+    assert [r[0].strip("`") for r in rows] == list(PHASES)
+    ends = [0.0, *Timeline().ends]
+    for k, row in enumerate(rows[:-1]):
+        assert float(row[1]) == pytest.approx(ends[k], abs=0.005), row
+        assert float(row[2]) == pytest.approx(ends[k + 1], abs=0.005), row
+
+
+def test_citation_and_type_marker_ship():
+    """CITATION.cff cites the paper by its DOI; softhand ships py.typed (PEP 561)."""
+    cff = (ROOT / "CITATION.cff").read_text(encoding="utf-8")
+    assert "doi: \"10.1186/1743-0003-8-16\"" in cff and "cff-version: 1.2.0" in cff
+    assert (ROOT / "softhand" / "py.typed").exists()
+    assert '"py.typed"' in (ROOT / "pyproject.toml").read_text(encoding="utf-8")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 
@@ -581,3 +582,38 @@ def test_each_contact_on_the_palm_surface_is_one_zones():
     assert areas.skin_force[zones].sum() == pytest.approx(total, rel=1e-12)
     for z in zones:
         assert info["region_forces_N"][env.region_names[z]] <= areas.skin_force[z] + 1e-9
+
+
+def test_the_env_refuses_pickle_and_deepcopy_in_one_line():
+    """Pickling or deep-copying the env is refused with one TypeError that says why and what to
+    do instead (it failed deep inside with "cannot pickle 'mujoco._structs.MjOption'"); a
+    shallow copy shares the simulation (the vector env's worlds of one scene)."""
+    import copy
+    import pickle
+
+    env = HandshakeEnv()
+    for attempt in (pickle.dumps, copy.deepcopy):
+        with pytest.raises(TypeError, match=r"^HandshakeEnv cannot be pickled or deep-copied: .*"
+                                            r"make another with the same arguments"):
+            attempt(env)
+    pickle.loads(pickle.dumps((env.model, env.data)))  # MuJoCo's own pickle
+    assert copy.copy(env).data is env.data
+
+
+def test_render_works_headless_without_mujoco_gl():
+    """On a machine without a display and without MUJOCO_GL, importing softhand picks EGL (else
+    OSMesa) before mujoco is imported, as the command line does, so env.render() works out of
+    the box (it ended in mujoco.FatalError)."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    code = ("import os, softhand; from softhand.envs import HandshakeEnv; "
+            "e = HandshakeEnv(render_mode='rgb_array'); e.reset(seed=0); "
+            "print(os.environ['MUJOCO_GL'], e.render().shape)")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    gl, shape = out.stdout.split(maxsplit=1)
+    assert gl in ("egl", "osmesa") and shape.strip() == "(480, 640, 3)", out.stdout

@@ -364,6 +364,25 @@ class TwoHandTouchEnv(gym.Env):
             self._warn_range(summary, "ended")
         return obs, reward, unstable, truncated, info
 
+    def __reduce_ex__(self, protocol):
+        """Pickling and deep copies (``copy.deepcopy``) are refused in one line: the env holds a
+        live simulation with its partner script, sensor electronics and accounting state, which
+        a copy would have to rebuild to stay one episode; make another env instead."""
+        raise TypeError(f"{type(self).__name__} cannot be pickled or deep-copied: it holds a live "
+                        "MuJoCo simulation and the state of its partner, sensors and accounting; "
+                        "make another with the same arguments (gymnasium.make('softhand/"
+                        "Handshake-v0', ...)) and reset it with the same seed, or pickle "
+                        "env.model and env.data (MuJoCo's own) for the physics alone")
+
+    def __deepcopy__(self, memo):
+        return self.__reduce_ex__(2)
+
+    def __copy__(self):
+        """A shallow copy shares the simulation (the vector env's worlds of one scene do)."""
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        return new
+
     def close(self) -> None:
         """Release the env: `step` and `reset` refuse afterwards (closing twice is
         harmless). An episode cut short here issues its range summary (`_warn_range`)."""
