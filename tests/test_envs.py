@@ -617,3 +617,13 @@ def test_render_works_headless_without_mujoco_gl():
     assert out.returncode == 0, out.stderr[-2000:]
     gl, shape = out.stdout.split(maxsplit=1)
     assert gl in ("egl", "osmesa") and shape.strip() == "(480, 640, 3)", out.stdout
+
+
+@pytest.mark.parametrize("size", [{180.0: 1, 85.0: 2}, "18", b"18", (180.0,), (180.0, 85.0, 1.0)])
+def test_a_partner_size_that_is_not_two_numbers_is_refused(size):
+    """partner_size is a sequence of two numbers (length, width mm); a mapping (its keys were
+    taken as the size), a string or another length is one ValueError naming it."""
+    from softhand.envs.partner import check_partner_size
+
+    with pytest.raises(ValueError, match=r"partner_size = .*expected \(length_mm, width_mm\)"):
+        check_partner_size(size)

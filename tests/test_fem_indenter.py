@@ -47,7 +47,8 @@ def test_indenter_forms_parse_to_a_canonical_text(text, canonical):
 
 @pytest.mark.parametrize("text, words", [
     ("disc:5", "expected plate, cylinder"), ("cylinder", "expected plate"),
-    ("cylinder:0", "(0, 1000] mm"), ("sphere:1001", "(0, 1000] mm"), ("sphere:nan", "(0, 1000]"),
+    ("cylinder:0", "[1, 1000] mm"), ("sphere:1001", "[1, 1000] mm"), ("sphere:nan", "[1, 1000]"),
+    ("cylinder:0.000001@90", "[1, 1000] mm"), ("sphere:0.5", "[1, 1000] mm"),
     ("cylinder:5@100", "[0, 90] deg"), ("cylinder:5@-1", "[0, 90] deg"),
     ("sphere:5@90", "takes no angle"), ("plate:5", "takes no radius"), ("cylinder:x", "expected"),
 ])

@@ -428,3 +428,18 @@ def test_a_stacked_chain_is_each_worlds_own_chain():
             stacked.readings.ravel()).reshape(3, 3))
     assert (stacked.readings > 0).any(axis=1).all()  # every world reads a load
     assert (stacked.estimates > stacked.readings).any()  # a pocket's share is under its load
+
+
+def test_a_sensor_placement_a_skin_cannot_take_is_refused_not_ignored():
+    """The human hand (human tissue, no FE model of an embedded sensor: surface pads) refuses a
+    placement asked for every region, and any skin without an FE model refuses one asked for
+    its region; it was ignored (the readings were the surface's)."""
+    from softhand.envs import HandshakeEnv
+
+    with pytest.raises(ValueError, match=r"sensor placement 'bone' for region Thumb1: its skin "
+                                         r"human-middle-phalanx has no FE model"):
+        HandshakeEnv(hand="human", sensor_placement="bone")
+    with pytest.raises(ValueError, match=r"placement 'bone' for region Index1: its skin rigid"):
+        HandshakeEnv(skins={"Index1": "rigid"}, sensor_placement={"Index1": "bone"})
+    env = HandshakeEnv(skins={"Index1": "rigid"}, sensor_placement="bone")  # honoured elsewhere
+    assert env.sensor_placements["Index2"] == "bone" and env.sensor_placements["Index1"] == "surface"

@@ -247,3 +247,19 @@ def test_the_warp_backend_keeps_standing_worlds_and_resets_one_world_alone():
         assert np.array_equal(again[f][1], after[f][1]), f
     assert again["time"][0] == 0.0
     vec.close()
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"num_envs": 10**6}, r"num_envs = 1000000: allowed 1-\d+ on this machine"),
+    ({"num_envs": 2, "nthread": 0}, r"nthread = 0: allowed an integer 1-\d+"),
+    ({"num_envs": 2, "nthread": -1}, r"nthread = -1: allowed an integer"),
+    ({"num_envs": 2, "nthread": 10**6}, r"nthread = 1000000: allowed an integer"),
+    ({"num_envs": 2, "nthread": 1.5}, r"nthread = 1.5: allowed an integer"),
+    ({"num_envs": 2, "device": "cuda:0"}, r"device = 'cuda:0' with backend = 'cpu'"),
+])
+def test_bad_worlds_threads_and_devices_are_refused_before_any_world_is_built(kwargs, needle):
+    """num_envs beyond what the machine holds (it was still building worlds after 90 s at
+    10**6), nthread outside 1..4 x CPUs (0, -1 and 10**6 were accepted, 1.5 a TypeError from
+    mujoco.batch) and a device on the cpu backend (ignored) are one ValueError each."""
+    with pytest.raises(ValueError, match=needle):
+        HandshakeVectorEnv(**kwargs)

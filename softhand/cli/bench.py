@@ -51,6 +51,8 @@ def bench_handshake(out_dir, scale, worlds) -> None:
     counts = None  # the benchmark's own default
     if worlds is not None:
         try:
+            if not all(v.strip().isdigit() for v in worlds.split(",")):  # no "1_0", "+2", "2.0"
+                raise ValueError(worlds)
             counts = tuple(int(v) for v in worlds.split(","))
         except ValueError:
             counts = ()

@@ -326,7 +326,8 @@ def _partner_size(text: str | None) -> tuple[float, float] | None:
 @click.option("--sheet", is_flag=True,
               help="A contact sheet instead: at the end of the grip, mid-shake and mid-hold, from "
                    "the back of each hand, from below and from the thumb side, regions coloured "
-                   "by force (ignores the camera options).")
+                   "by force (its own times, views and size: --at and the camera options are "
+                   "refused with it).")
 @click.option("--video", is_flag=True,
               help="An animated GIF of the whole handshake instead (OUT .gif): the env's "
                    "rgb_array frames from the camera options, 12.5 frames per second of "
@@ -355,6 +356,17 @@ def render(out, design, controller, seed, at_s, azimuth, elevation, distance, si
         bad("--design '': expected a skin name, e.g. pocket2-sil")
     if sheet and video:
         bad("--sheet and --video: choose one")
+    # an option the chosen picture does not use is refused, not ignored
+    given = [name for name in ("at_s", "azimuth", "elevation", "distance", "size")
+             if click.get_current_context().get_parameter_source(name)
+             is not click.core.ParameterSource.DEFAULT]
+    unused = (given if sheet else [n for n in given if n == "at_s"] if video else [])
+    if unused:
+        flag = {"at_s": "--at"}.get(unused[0], f"--{unused[0]}")
+        bad(f"{flag} with {'--sheet' if sheet else '--video'}: "
+            + ("the sheet has its own times (the end of the grip, mid-shake and mid-hold), "
+               "views and size" if sheet else "the video shows the whole handshake")
+            + f"; allowed with {'--sheet' if sheet else '--video'}: no {flag}")
     path = checked_file(out, "OUT", ".gif" if video else ".png")
     size_mm = _partner_size(partner_size)
     _check_hand(hand, controller, design=design)

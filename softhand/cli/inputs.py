@@ -183,10 +183,10 @@ class IndenterText(click.ParamType):
 _OPT_INDENTER = click.option(
     "--indenter", type=IndenterText(), default="plate", show_default=True,
     metavar="plate|cylinder:R_MM[@ANGLE_DEG]|sphere:R_MM",
-    help="Rigid indenter: the paper's plate, a cylinder of radius R in (0, 1000] mm with its "
+    help="Rigid indenter: the paper's plate, a cylinder of radius R in [1, 1000] mm with its "
          "axis at ANGLE_DEG in [0, 90] from the phalanx axis (0: along it, 90: across it, the "
          "default; other angles run the full phalanx, 4x the elements, no embedded sensors, "
-         "not exportable), or a sphere of radius R in (0, 1000] mm. 2d takes the plate and "
+         "not exportable), or a sphere of radius R in [1, 1000] mm. 2d takes the plate and "
          "cylinder:R@0 only.")
 
 
@@ -284,6 +284,9 @@ def parse_geometry(items: tuple[str, ...]) -> dict[str, float]:
             bad(f"--geometry {item!r}: {value!r} is not a number")
         if not math.isfinite(number):
             bad(f"--geometry {item!r}: {value!r} is not a finite number")
+        if key.strip() in out:
+            bad(f"--geometry {item!r}: {key.strip()} is given twice ({out[key.strip()]:g}, then "
+                f"{number:g}); allowed: each key once")
         out[key.strip()] = number
     return out
 
@@ -330,6 +333,10 @@ def make_settings(designs: list[str], *, geometry, materials_path, mode="3d", **
         parse_indenter(indenter).check_mode(mode)
     except ValueError as exc:
         bad(f"--indenter {indenter!r} with --mode {mode}: {str(exc).split(': ', 1)[-1]}")
+    if kw.get("engine") == "numpy" and kw.get("solver", "auto") != "auto":
+        bad(f"--solver {kw['solver']} with --engine numpy: the NumPy engine solves with SuperLU, "
+            "a sparse Cholesky is the compiled engine's (allowed with --engine numpy: "
+            "--solver auto)")
     try:
         settings = IndentationSettings(mode=mode, **kw)
     except ValueError as exc:  # the option types already checked each number
@@ -400,6 +407,9 @@ def parse_skin_overrides(items: tuple[str, ...]) -> dict[str, str]:
         if not sep or not region.strip() or not design.strip():
             bad(f"--skin {item!r}: expected REGION=DESIGN[@REPRESENTATION] (e.g. "
                 "Index2=pocket2-pu@soft-contact+relaxation)")
+        if region.strip() in out:
+            bad(f"--skin {item!r}: {region.strip()} is given twice ({out[region.strip()]}, then "
+                f"{design.strip()}); allowed: each region once")
         out[region.strip()] = design.strip()
     return out
 

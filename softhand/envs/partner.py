@@ -390,8 +390,8 @@ def check_partner_size(size) -> tuple[float, float]:
                 float(subjects["experimenter_hand_width_mm"]))
     ranges = partner_size_range()
     allowed = ", ".join(f"{k} {lo:.1f}-{hi:.1f} mm" for k, (lo, hi) in ranges.items())
-    try:
-        values = tuple(float(v) for v in size)
+    try:  # a sequence of two numbers: not a mapping (its keys) nor a string (its characters)
+        values = () if isinstance(size, (Mapping, str, bytes)) else tuple(float(v) for v in size)
     except (TypeError, ValueError):
         values = ()
     if len(values) != 2 or not all(np.isfinite(values)):

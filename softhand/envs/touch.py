@@ -99,6 +99,24 @@ HANDS = ("prosthetic", "human")
 RENDER_MODES = ("rgb_array",)
 
 
+def _check_placements_honoured(asked: str | Mapping[str, str] | None,
+                               placements: Mapping[str, str], used: Mapping[str, str],
+                               skins: Mapping[str, str]) -> None:
+    """A sensor placement is honoured or refused, never ignored: a skin without an FE model
+    (human tissue, rigid, the commercial 102L) has its sensor on the surface, so a placement
+    asked for such a region (or, asked for every region, honoured by none) is a ValueError."""
+    if asked is None:
+        return
+    regions = list(asked) if isinstance(asked, Mapping) else list(placements)
+    refused = [r for r in regions if used[r] != placements[r]]
+    if refused and (isinstance(asked, Mapping) or len(refused) == len(regions)):
+        r = refused[0]
+        raise ValueError(f"sensor placement {placements[r]!r} for region {r}: its skin "
+                         f"{skins[r]} has no FE model of an embedded sensor, so its sensor reads "
+                         "the surface (the paper's pads on the human hand): leave the placement "
+                         "out for it")
+
+
 class TwoHandTouchEnv(gym.Env):
     """A sensored hand touched by a scripted human partner, in the way ``scenario`` scripts.
 
@@ -180,6 +198,8 @@ class TwoHandTouchEnv(gym.Env):
             raise ValueError(f"sensor = {show(sensor)}: expected a SensorSpec")
         placements = parse_placements(tuple(self.skins), sensor_placement)
         laws, self.sensor_placements = region_laws(self.skins, placements, sensor_dir)
+        _check_placements_honoured(sensor_placement, placements, self.sensor_placements,
+                                   self.skins)
         #: the regions' embedded sensors: transfer laws, then the electronics
         self.sensors = SensorChain(laws, spec, self.frame_skip * timestep_s)
         directory = SKINS_DIR if calibration_dir is None else calibration_dir

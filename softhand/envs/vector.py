@@ -49,6 +49,7 @@ again (a population runs each partner's one episode so). A diverged world is rep
 from __future__ import annotations
 
 import copy
+import os
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
@@ -124,6 +125,25 @@ def _world_options(options: Mapping | None, n: int) -> list[dict]:
     return [check_reset_options(o) for o in out]
 
 
+#: memory of one world (bytes): the scene's MjData (its arena and buffer, 17 MB) with its
+#: sensors and partner script
+WORLD_BYTES = 20e6
+
+
+def _max_worlds() -> int:
+    """The most worlds one vector env holds on this machine: 80 % of its memory (4096 at most)."""
+    try:
+        memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # not POSIX: the cap alone
+        return 4096
+    return max(1, min(4096, int(0.8 * memory / WORLD_BYTES)))
+
+
+MAX_WORLDS = _max_worlds()
+#: the most threads of a mujoco.batch (more than the CPUs only queue)
+MAX_THREADS = max(1, 4 * (os.cpu_count() or 1))
+
+
 class HandshakeVectorEnv(VectorEnv):
     """W handshakes between the prosthetic hand and scripted partners, stepped together (module
     docstring).
@@ -160,6 +180,20 @@ class HandshakeVectorEnv(VectorEnv):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) \
                 or num_envs < 1:
             raise ValueError(f"num_envs = {show(num_envs)}: expected an integer >= 1")
+        if num_envs > MAX_WORLDS:
+            raise ValueError(f"num_envs = {show(num_envs)}: allowed 1-{MAX_WORLDS} on this "
+                             f"machine (each world holds its own MjData, sensors and partner, "
+                             f"about {WORLD_BYTES / 1e6:.0f} MB; 80 % of the memory); run more "
+                             "as a population batch or on other machines (--cluster)")
+        if nthread is not None and (isinstance(nthread, bool)
+                                    or not isinstance(nthread, (int, np.integer))
+                                    or not 1 <= nthread <= MAX_THREADS):
+            raise ValueError(f"nthread = {show(nthread)}: allowed an integer 1-{MAX_THREADS} "
+                             f"(this machine has {os.cpu_count()} CPUs), or None for the CPUs "
+                             "this process may use")
+        if device is not None and backend != "warp":
+            raise ValueError(f"device = {show(device)} with backend = {show(backend)}: a device "
+                             "is MuJoCo Warp's (backend = 'warp'); the cpu backend takes none")
         n = self.num_envs = int(num_envs)
         if worlds is not None and (isinstance(worlds, (str, Mapping)) or len(worlds) != n):
             raise ValueError(f"worlds = {show(worlds)}: expected {n} mappings of HandshakeEnv "

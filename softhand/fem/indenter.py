@@ -1,6 +1,6 @@
 """The rigid indenter of an FE run: the paper's flat plate, a cylinder or a sphere.
 
-Written ``plate``, ``cylinder:R_MM[@ANGLE_DEG]`` or ``sphere:R_MM`` (radius R in (0, 1000] mm;
+Written ``plate``, ``cylinder:R_MM[@ANGLE_DEG]`` or ``sphere:R_MM`` (radius R in [1, 1000] mm;
 the cylinder's axis at ANGLE_DEG from the phalanx axis, default 90: across the finger). Every
 indenter moves down (-y) at the run's speed, centred over the top of the phalanx (x = z = 0):
 the plate's face, the cylinder's lowest line and the sphere's lowest point start at the top of
@@ -25,11 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["INDENTER_FORMS", "MAX_RADIUS_MM", "SYMMETRIC_ANGLES", "Indenter", "parse_indenter"]
+__all__ = ["INDENTER_FORMS", "MAX_RADIUS_MM", "MIN_RADIUS_MM", "SYMMETRIC_ANGLES", "Indenter", "parse_indenter"]
 
 MAX_RADIUS_MM = 1000.0  # a 1000 mm cylinder gives the plate's force within 1 % (tested, 2D)
+#: the smallest radius: a fingertip's is 7-11 mm; under 1 mm the contact is narrower than the
+#: phalanx's surface elements and the penalty contact cannot resolve it (a needle, not a touch)
+MIN_RADIUS_MM = 1.0
 SYMMETRIC_ANGLES = (0.0, 90.0)  # cylinder angles the quarter model can carry
-INDENTER_FORMS = ("plate, cylinder:R_MM[@ANGLE_DEG] or sphere:R_MM with R in (0, 1000] mm and "
+INDENTER_FORMS = ("plate, cylinder:R_MM[@ANGLE_DEG] or sphere:R_MM with R in [1, 1000] mm and "
                   "ANGLE_DEG in [0, 90] from the phalanx axis (default 90: across it)")
 _FORM = re.compile(r"^(plate|cylinder|sphere)(?::([^@]+)(?:@(.+))?)?$")
 
@@ -44,7 +47,7 @@ class Indenter:
 
     Attributes:
         kind: ``"plate"``, ``"cylinder"`` or ``"sphere"``.
-        radius_mm: radius of the cylinder or sphere, in (0, 1000] (None for the plate).
+        radius_mm: radius of the cylinder or sphere, in [1, 1000] mm (None for the plate).
         angle_deg: the cylinder's axis from the phalanx axis, in [0, 90] (None otherwise).
     """
 
@@ -110,9 +113,9 @@ def parse_indenter(text: str) -> Indenter:
         r = float(r_text)
     except ValueError:
         raise ValueError(bad) from None
-    if not (math.isfinite(r) and 0.0 < r <= MAX_RADIUS_MM):
+    if not (math.isfinite(r) and MIN_RADIUS_MM <= r <= MAX_RADIUS_MM):
         raise ValueError(f"indenter = {text!r}: radius {r_text} mm outside the allowed range "
-                         f"(0, {MAX_RADIUS_MM:g}] mm")
+                         f"[{MIN_RADIUS_MM:g}, {MAX_RADIUS_MM:g}] mm")
     if kind == "sphere":
         return Indenter("sphere", r)
     angle = 90.0
