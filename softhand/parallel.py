@@ -140,6 +140,7 @@ def _connect(address: object, name: str):
         try:
             client = Client(address, timeout=CLUSTER_TIMEOUT_S, set_as_default=False)
         except Exception as exc:
+            _close_half_made(exc, Client)
             box["error"] = exc
             return
         with lock:
@@ -162,8 +163,26 @@ def _connect(address: object, name: str):
     if exc is None or isinstance(exc, (OSError, TimeoutError)):
         raise ValueError(f"{name} {address!r}: no Dask scheduler answered within "
                          f"{CLUSTER_TIMEOUT_S:g} s; {_ALLOWED_CLUSTER}")
-    raise ValueError(f"{name} {address!r}: could not connect to a Dask scheduler "
-                     f"({': '.join(_one_line(exc))}); {_ALLOWED_CLUSTER}")
+    # anything else is a peer that answered but not in Dask's protocol: its bytes read as a
+    # frame length gave MemoryError ("Unable to allocate 3.07 EiB"), or a bad frame
+    raise ValueError(f"{name} {address!r}: not a Dask scheduler (something answers there, but "
+                     f"not in Dask's protocol: {_one_line(exc)[0]}); {_ALLOWED_CLUSTER}")
+
+
+def _close_half_made(exc: BaseException, client_type: type) -> None:
+    """Close the Client that raised ``exc`` in its constructor, here and briefly: left to the
+    garbage collector, its ``__del__`` waits 10 s on a peer that is not a scheduler and prints
+    a traceback ("Exception ignored in: Client.__del__") when the command has already said
+    why it stopped."""
+    tb = exc.__traceback__
+    while tb is not None:
+        me = tb.tb_frame.f_locals.get("self")
+        if isinstance(me, client_type):
+            with contextlib.suppress(Exception):
+                me.close(timeout=1)
+            me._Client__loop = None  # its __del__ has nothing left to close
+        tb = tb.tb_next
+    exc.__traceback__ = None
 
 
 def check_cluster(address: str, *, name: str = "cluster") -> str:

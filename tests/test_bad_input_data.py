@@ -400,6 +400,8 @@ def test_bad_env_arguments_name_the_argument_value_and_range(kwargs, needle):
     ([np.nan, 0, 0, 0, 0, 0], "action [nan  0.  0.  0.  0.  0.] is outside the action space"),
     ([0, 0, np.inf, 0, 0, 0], "is outside the action space: 6 finite values in [-1, 1]"),
     ([2.0, 0, 0, 0, 0, 0], "action [2. 0. 0. 0. 0. 0.] is outside the action space"),
+    # shown as given: it was printed "1.", which looks allowed
+    ([1.0001, 0, 0, 0, 0, 0], "action [1.0001 0.     0.     0.     0.     0.    ] is outside"),
 ])
 def test_bad_actions_and_seeds_are_refused(env, action, needle):
     env.reset(seed=0)

@@ -222,3 +222,38 @@ def test_ctrl_c_keeps_the_finished_task_and_drops_the_running_one(cluster, tmp_p
     outcome = json.loads((seen + out)[(seen + out).index('{"results"'):].strip())
     assert outcome == {"results": {"fast": None}, "missing": ["slow"], "interrupted": True}
     assert "Traceback" not in err
+
+
+def test_an_address_that_answers_but_not_as_dask_is_not_a_dask_scheduler(capfd):
+    """A peer that answers in another protocol (here a server on the loopback that writes a few
+    bytes of HTTP) was refused with "MemoryError: Unable to allocate 3.07 EiB" (its bytes read
+    as a frame length), and the half-made client printed a traceback at exit: now one
+    ValueError, "not a Dask scheduler", and nothing else on stderr."""
+    import gc
+    import socket
+    import threading
+
+    from softhand.parallel import check_cluster
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    port = server.getsockname()[1]
+
+    def serve() -> None:
+        while True:
+            try:
+                conn, _ = server.accept()
+                conn.sendall(b"HTTP/1.1 200 OK\r\n\r\n" + b"\xff" * 64)
+            except OSError:
+                return
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        with pytest.raises(ValueError, match=rf"--cluster 'tcp://127.0.0.1:{port}': not a Dask "
+                                             r"scheduler \(something answers there"):
+            check_cluster(f"tcp://127.0.0.1:{port}", name="--cluster")
+        gc.collect()
+    finally:
+        server.close()
+    assert "Traceback" not in capfd.readouterr().err

@@ -81,7 +81,11 @@ def env():
     ({"timestep_s": None}, "timestep_s = None: expected a finite number in [0.0001, 0.005] s"),
     ({"timestep_s": NAN}, "timestep_s = nan: expected a finite number in [0.0001, 0.005] s"),
     ({"partner_size": ""}, "partner_size = '': expected (length_mm, width_mm)"),
-    ({"partner_size": (1e3, 88)}, "partner_size length = 1000 mm: allowed 159.1-215.9 mm"),
+    ({"partner_size": (1e3, 88)}, "partner_size length = 1000.0 mm: allowed 159.075-215.925 mm"),
+    ({"partner_size": (190, 72.5)}, "partner_size width = 72.5 mm: allowed 72.53-106.53 mm"),
+    ({"timestep_s": 0.005, "frame_skip": 20},  # named by what the user set, not the sensor
+     "frame_skip = 20 x timestep_s = 0.005 s makes an env step of 0.1 s, longer than the default "
+     "sensor's sampling period 0.01 s"),
     ({"partner_size": (190, NAN)}, "partner_size = (190, nan): expected (length_mm, width_mm)"),
 ])
 def test_every_bad_keyword_is_refused_before_any_model_is_built(monkeypatch, kwargs, needle):

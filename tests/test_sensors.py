@@ -443,3 +443,20 @@ def test_a_sensor_placement_a_skin_cannot_take_is_refused_not_ignored():
         HandshakeEnv(skins={"Index1": "rigid"}, sensor_placement={"Index1": "bone"})
     env = HandshakeEnv(skins={"Index1": "rigid"}, sensor_placement="bone")  # honoured elsewhere
     assert env.sensor_placements["Index2"] == "bone" and env.sensor_placements["Index1"] == "surface"
+
+
+def test_a_transfer_file_without_the_design_says_which_designs_it_has(tmp_path):
+    """A transfer.json that lacks the skin's design altogether said "allowed: " with an empty
+    list; now it names the designs the file has and what to run."""
+    import json
+
+    from softhand.envs import HandshakeEnv
+    from softhand.paths import SENSORS_DIR
+
+    data = json.loads((SENSORS_DIR / "transfer.json").read_text(encoding="utf-8"))
+    del data["laws"]["pocket2-sil"]
+    (tmp_path / "transfer.json").write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"has no transfer law for pocket2-sil at any placement "
+                                         r"\(it has pocket1-pu, .*\): run `softhand sensors "
+                                         r"calibrate` for pocket2-sil"):
+        HandshakeEnv(sensor_dir=tmp_path)

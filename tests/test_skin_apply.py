@@ -379,3 +379,22 @@ def test_cli_lists_the_changes_and_writes_them(tmp_path):
     assert res.exit_code != 0 and "Traceback" not in res.output
     assert "geom 'plate' is not written by name in user_hand.xml" in res.output
     assert not (tmp_path / "x.xml").exists()
+
+
+def test_skinning_a_geom_of_the_world_says_why_nothing_is_left_to_press_it():
+    """A skin on a world geom (a floor plane) made every geom of the model part of the "hand",
+    and the message said "no collidable geom outside the hand"; now it says the skinned geoms
+    meet only in the world body and points at --against (with which it works)."""
+    import mujoco
+
+    from softhand.skin.apply import apply_skin
+
+    xml = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 0.1"/>
+      <body name="b" pos="0 0 0.1"><freejoint/><geom name="box" type="box" size=".01 .01 .01"/>
+      </body></worldbody></mujoco>"""
+    with pytest.raises(ValueError, match=r"the skinned geoms floor meet only in the world body.*"
+                                         r"name the counterparts with --against"):
+        apply_skin(mujoco.MjSpec.from_string(xml), {"floor": "pocket2-sil"})
+    skinned = apply_skin(mujoco.MjSpec.from_string(xml), {"floor": "pocket2-sil"},
+                         against=["box"])
+    assert [s.geom for s in skinned] == ["floor"]

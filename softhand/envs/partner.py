@@ -389,7 +389,7 @@ def check_partner_size(size) -> tuple[float, float]:
         return (float(subjects["experimenter_hand_length_mm"]),
                 float(subjects["experimenter_hand_width_mm"]))
     ranges = partner_size_range()
-    allowed = ", ".join(f"{k} {lo:.1f}-{hi:.1f} mm" for k, (lo, hi) in ranges.items())
+    allowed = ", ".join(f"{k} {lo:g}-{hi:g} mm" for k, (lo, hi) in ranges.items())
     try:  # a sequence of two numbers: not a mapping (its keys) nor a string (its characters)
         values = () if isinstance(size, (Mapping, str, bytes)) else tuple(float(v) for v in size)
     except (TypeError, ValueError):
@@ -400,7 +400,7 @@ def check_partner_size(size) -> tuple[float, float]:
     for key, value in zip(("length", "width"), values, strict=True):
         lo, hi = ranges[key]
         if not lo - 1e-9 <= value <= hi + 1e-9:
-            raise ValueError(f"partner_size {key} = {value:g} mm: allowed {lo:.1f}-{hi:.1f} mm "
+            raise ValueError(f"partner_size {key} = {value!r} mm: allowed {lo:g}-{hi:g} mm "
                              f"(+-{PARTNER_SD_RANGE:g} SD of the paper's subjects, Table 1)")
     return values
 

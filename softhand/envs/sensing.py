@@ -82,6 +82,12 @@ def region_laws(skins: Mapping[str, str], placements: Mapping[str, str],
         if law is None:
             have = sorted(q for d, q in table if d == skin)
             why = " (it has no pocket)" if p == "pocket-floor" and "pocket" not in skin else ""
+            if not have:  # the file lacks the design altogether
+                designs = sorted({d for d, _ in table})
+                raise ValueError(f"sensor placement {p!r} for region {region}: {path} has no "
+                                 f"transfer law for {skin} at any placement (it has "
+                                 f"{', '.join(designs) or 'none'}): run `softhand sensors "
+                                 f"calibrate` for {skin}, or give the region a skin it has")
             raise ValueError(f"sensor placement {p!r} for region {region}: {path} has no "
                              f"transfer law for {skin}{why}; allowed: {', '.join(have)}")
         laws.append(law)

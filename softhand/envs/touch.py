@@ -201,7 +201,14 @@ class TwoHandTouchEnv(gym.Env):
         _check_placements_honoured(sensor_placement, placements, self.sensor_placements,
                                    self.skins)
         #: the regions' embedded sensors: transfer laws, then the electronics
-        self.sensors = SensorChain(laws, spec, self.frame_skip * timestep_s)
+        step_s = self.frame_skip * timestep_s
+        if sensor is None and spec.period_s < step_s - 1e-9:  # the user chose the step, not this
+            raise ValueError(
+                f"frame_skip = {self.frame_skip} x timestep_s = {timestep_s:g} s makes an env step "
+                f"of {step_s:g} s, longer than the default sensor's sampling period "
+                f"{spec.period_s:g} s (the sensor model steps with the env); allowed: frame_skip "
+                f"x timestep_s <= {spec.period_s:g} s, or a sensor whose period_s >= {step_s:g} s")
+        self.sensors = SensorChain(laws, spec, step_s)
         directory = SKINS_DIR if calibration_dir is None else calibration_dir
         self.calibration_dir = str(directory)  # where the skins' laws came from
         for skin in sorted({*self.skins.values(), "rigid"}):
@@ -333,7 +340,8 @@ class TwoHandTouchEnv(gym.Env):
         a = raw.astype(np.float64, copy=False)
         if a.shape != (6,) or not within(a, -1.0 - 1e-6, 1.0 + 1e-6):  # NaN is not within
             got = f" (got shape {a.shape})" if a.shape != (6,) else ""
-            raise ValueError(f"action {np.array2string(a, precision=3)} is outside the action "
+            shown = np.array2string(a, floatmode="unique")  # 1.0001 shown as it is, not "1."
+            raise ValueError(f"action {shown} is outside the action "
                              f"space: 6 finite values in [-1, 1]{got}")
         if not self._planned:
             raise RuntimeError("call reset() before step()")

@@ -238,6 +238,11 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
     if against is None:
         others = [g.name for g in spec.geoms if g.name not in hand
                   and (g.contype or g.conaffinity)]
+        if not others and root.name == spec.worldbody.name:
+            raise ValueError(f"the skinned geoms {', '.join(chosen)} meet only in the world body "
+                             "(a geom of the world, or of two separate bodies), so every geom of "
+                             "the model counts as the skinned hand and none is left to press it: "
+                             "name the counterparts with --against")
         if not others:
             raise ValueError(f"no collidable geom outside the hand (body {root.name!r}) to press "
                              "the skin against: name the counterparts with --against")
