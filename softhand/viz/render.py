@@ -27,6 +27,7 @@ from softhand.envs.picture import (
     CameraView,
     ScenePicture,
     check_size,
+    force_colors,
     posed_data,
     region_colours,
 )
@@ -91,7 +92,8 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
     the midpoint of the two palms. The prosthetic's skin regions are coloured by their force
     (softhand.envs.picture.region_colours: pale to mid grey under 2 N, orange to red over), its
     other skin grey, the partner's tissue blue (HAND_COLOURS, as in every picture); MuJoCo's
-    contact points shown."""
+    contact points shown (they lie inside the pressed skins, so few show), and a colour bar of
+    the force in N under the sheet."""
     target = check_writable_file(path, suffix=".png")
     check_size(size, size)
     import matplotlib
@@ -113,13 +115,30 @@ def render_sheet(model: mujoco.MjModel, frames: list[SheetFrame], path: str | os
                 ax.imshow(picture.draw(data, view, contacts=contacts, colours=colours))
                 ax.set_title(f"{frame.label}\n{title}", fontsize=9)
                 ax.axis("off")
-    fig.text(0.5, 0.005, "prosthetic skin by force: grey < 2 N, orange-red > 2 N (red 5 N); "
-             "partner's hand blue; contact points magenta", ha="center", fontsize=8)
-    fig.tight_layout(rect=(0, 0.02, 1, 1))
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    _force_scale(fig, [0.25, 0.05, 0.5, 0.012],
+                 "prosthetic skin by its region's force, N (a skin of several zones, the palm: its "
+                 "largest); the partner's hand blue")
     with atomic_open(target, "wb") as fh:
         fig.savefig(fh, format="png", dpi=100)
     plt.close(fig)
     return target
+
+
+def _force_scale(fig, rect: list[float], label: str, top_N: float = 6.0) -> None:
+    """A colour bar of `force_colors` (N) in ``fig`` at ``rect`` (figure fractions), so that a
+    picture's force can be read, not only its side of 2 N."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import ListedColormap, Normalize
+
+    levels = np.linspace(0.0, top_N, 256)
+    cmap = ListedColormap(force_colors(levels) / 255.0)
+    bar = fig.colorbar(ScalarMappable(norm=Normalize(0.0, top_N), cmap=cmap),
+                       cax=fig.add_axes(rect), orientation="horizontal",
+                       ticks=np.arange(0.0, top_N + 0.5, 1.0))
+    bar.ax.tick_params(labelsize=7)
+    bar.ax.set_xticklabels([f"{t:g}" if t < top_N else f"{t:g}+" for t in bar.get_ticks()])
+    bar.set_label(label, fontsize=8)
 
 
 def write_video(frames: list[np.ndarray], path: str | os.PathLike, *, fps: float) -> Path:
