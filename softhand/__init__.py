@@ -35,3 +35,20 @@ def _default_gl() -> None:
 
 
 _default_gl()
+
+from softhand.requirements import CHECKED as _CHECKED  # noqa: E402
+from softhand.requirements import RequirementError as _RequirementError  # noqa: E402
+from softhand.requirements import check as _check  # noqa: E402
+
+# an older numpy, scipy, mujoco, rerun-sdk or gymnasium fails deep inside, naming no version (an
+# AttributeError; "No module named 'rerun.chunk'"): refused here, in one line (versions are read
+# from the packages' metadata; nothing is imported). The command line, which imports this
+# package before its own error handling runs, says it as its one line and exits 1.
+try:
+    _check(*_CHECKED)
+except _RequirementError as _exc:
+    _argv0 = _sys.argv[0] if _sys.argv else ""
+    if _os.path.basename(_argv0) == "softhand" or _argv0 == "-m":  # the console script, python -m
+        print(f"error: {_exc}", file=_sys.stderr)
+        raise SystemExit(1) from None
+    raise

@@ -13,7 +13,8 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "softhand"
 ORDER = ("fem", "laws", "skin", "sensors", "design", "hands", "envs", "viz", "bench", "cli")
-BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "compiled", "data"}
+BASE = {"__init__", "paths", "io", "validate", "paper", "parallel", "warn", "compiled", "data",
+        "requirements"}
 CLI = {"cli"}
 
 
@@ -54,5 +55,5 @@ def test_every_stage_imports_only_earlier_stages():
 
 
 def test_base_modules_import_no_stage():
-    for name in ("paths", "io", "validate", "paper", "parallel", "warn", "compiled"):
+    for name in ("paths", "io", "validate", "paper", "parallel", "warn", "compiled", "requirements"):
         assert _imports(PACKAGE / f"{name}.py") <= BASE, name
