@@ -147,7 +147,28 @@ def test_readme_docs_and_changelog_link_only_inside_the_repository():
 def test_every_report_is_included_on_a_page():
     included = "\n".join(p.read_text(encoding="utf-8") for p in PAGES)
     for report in sorted((ROOT / "reports").glob("*.md")):
-        assert f'--8<-- "reports/{report.name}"' in included, report.name
+        assert f"<!-- softhand:include reports/{report.name} -->" in included, report.name
+
+
+def test_the_docs_sources_hold_their_generated_tables_and_read_on_github():
+    """Each page's Markdown holds its generated tables between their markers, as fresh as the
+    site's (`python docs/_hooks/softhand_docs.py` writes them), and no raw include line: an
+    included report stands as a link (GitHub showed build-time placeholders and 24 raw
+    `--8<--` lines)."""
+    sys.path.insert(0, str(ROOT / "docs" / "_hooks"))
+    try:
+        from softhand_docs import filled
+    finally:
+        sys.path.pop(0)
+    stale = [p.name for p in PAGES
+             if filled(p.read_text(encoding="utf-8"), p.relative_to(ROOT / "docs").as_posix())
+             != p.read_text(encoding="utf-8")]
+    assert not stale, f"run python docs/_hooks/softhand_docs.py: {stale} are out of date"
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        assert not re.search(r'^-{1,}8<-{1,}\s+"', text, re.MULTILINE), page.name
+        for marker in re.findall(r"^<!-- softhand:([a-z-]+) -->$", text, re.MULTILINE):
+            assert f"<!-- /softhand:{marker} -->" in text, (page.name, marker)
 
 
 def test_the_pair_and_geom_counts_in_the_docs_are_the_shipped_scenes():

@@ -274,7 +274,12 @@ def _materials() -> str:
             "(`softhand materials` prints every source).*")
 
 
+def _quickstart() -> str:
+    return "```python\n" + (ROOT / "docs" / "quickstart.py").read_text().rstrip() + "\n```"
+
+
 GENERATED: dict[str, Callable[[], str]] = {
+    "quickstart": _quickstart,
     "materials": _materials,
     "paper-agreement": _paper_agreement,
     "paper-details": _paper_details,
@@ -286,13 +291,66 @@ GENERATED: dict[str, Callable[[], str]] = {
     "observations": _observations,
 }
 _MARKER = re.compile(r"^<!-- softhand:(?P<name>[a-z-]+) -->$", re.MULTILINE)
+#: a generated region as the Markdown source keeps it (so that GitHub shows the table too)
+_REGION = re.compile(r"^<!-- softhand:(?P<name>[a-z-]+) -->\n.*?^<!-- /softhand:(?P=name) -->$",
+                     re.MULTILINE | re.DOTALL)
+#: an included report as the source keeps it: a comment naming the file, then a link to it (what
+#: GitHub shows); the site pastes the file there (pymdownx.snippets)
+_INCLUDE_LINK = re.compile(r"^<!-- softhand:include (?P<path>\S+\.md) -->\n\[[^\]\n]*\]\([^)\n]*\)$",
+                           re.MULTILINE)
+_LEGACY_INCLUDE = re.compile(r'^-{1,}8<-{1,}\s+"(?P<path>[^"]+\.md)"\s*$', re.MULTILINE)
+
+
+def filled(markdown: str, where: str = "page") -> str:
+    """``markdown`` with every generated region (``<!-- softhand:NAME -->`` ... ``<!--
+    /softhand:NAME -->``, or a lone opening line) holding its fresh table, and every report
+    include written as a comment and a link: what the sources keep, so that a page reads on
+    GitHub as on the site (`python docs/_hooks/softhand_docs.py` writes it; a test checks the
+    sources are up to date)."""
+    def region(m: re.Match) -> str:
+        name = m["name"]
+        if name not in GENERATED:
+            raise ValueError(f"{where}: <!-- softhand:{name} --> is unknown; allowed: "
+                             f"{', '.join(GENERATED)}")
+        return f"<!-- softhand:{name} -->\n\n{GENERATED[name]()}\n\n<!-- /softhand:{name} -->"
+
+    depth = where.count("/")  # a page in docs/: its links to the repository go up one level
+
+    def include(m: re.Match) -> str:
+        path = m["path"]
+        up = "../" * (depth + 1)
+        return f"<!-- softhand:include {path} -->\n[{path}]({up}{path})"
+
+    text = _REGION.sub(lambda m: f"<!-- softhand:{m['name']} -->", markdown)
+    text = _MARKER.sub(region, text)
+    return _LEGACY_INCLUDE.sub(include, text)
+
+
+_REGION_EDGE = re.compile(r"^<!-- /?softhand:[a-z-]+ -->\n", re.MULTILINE)
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
-    def generated(m: re.Match) -> str:
-        if m["name"] not in GENERATED:
-            raise ValueError(f"{page.file.src_uri}: <!-- softhand:{m['name']} --> is unknown; "
-                             f"allowed: {', '.join(GENERATED)}")
-        return GENERATED[m["name"]]()
+    text = filled(markdown, page.file.src_uri)
+    # the site pastes each report where its link stands, and drops the regions' edges
+    text = _INCLUDE_LINK.sub(lambda m: f'--8<-- "{m["path"]}"', text)
+    return _REGION_EDGE.sub("", text)
 
-    return _MARKER.sub(generated, markdown)
+
+def main() -> int:
+    """Write every page's generated regions and includes into its Markdown source."""
+    changed = []
+    for path in sorted((ROOT / "docs").rglob("*.md")):
+        text = path.read_text(encoding="utf-8")
+        new = filled(text, path.relative_to(ROOT / "docs").as_posix())
+        if new != text:
+            path.write_text(new, encoding="utf-8")
+            changed.append(path.relative_to(ROOT).as_posix())
+    print(("rewrote " + ", ".join(changed)) if changed else "the docs are up to date")
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.path.insert(0, str(ROOT))
+    sys.exit(main())
