@@ -59,7 +59,9 @@ def population_figure(peaks: Sequence[Mapping[str, float]], paper_over_2n: Seque
     for label, m in zip(bottom.get_xticklabels(), marked, strict=True):
         if m:
             label.set_fontweight("bold")
-    bottom.text(0.0, 1.02, "red, bold: over 2 N in the paper's Fig. 4 (30 subjects)",
+            label.set_color("tab:red")
+    bottom.text(0.0, 1.02, "red (bars, points and bold names): over 2 N in the paper's Fig. 4 "
+                "(30 subjects)",
                 transform=bottom.transAxes, fontsize=9)
     fig.tight_layout()
     with atomic_open(target, "wb") as fh:
