@@ -118,9 +118,16 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
     laws = load_transfer_laws(Path(root) / "transfer.json")
     fig, axes = plt.subplots(2, 3, figsize=(15, 9))
     designs = sorted({d for d, _ in laws})
-    colours = plt.cm.tab20(np.linspace(0, 1, len(designs)))
+    # one colour per material layout, one line style and marker per topology: 12 designs that
+    # can be told apart (20 shades of one colour map could not)
+    layout_colour = {"sil": "tab:blue", "pu": "tab:red", "sil-pu": "tab:green",
+                     "pu-sil": "tab:orange"}
+    topology_style = {"solid": ("-", "o"), "pocket1": ("--", "s"), "pocket2": (":", "^")}
     for col, placement in enumerate(PLACEMENT_ORDER):
-        for c, design in zip(colours, designs, strict=True):
+        for design in designs:
+            topology, _, materials = design.partition("-")
+            c = layout_colour.get(materials, "k")
+            line, marker = topology_style.get(topology, ("-", "o"))
             law = laws.get((design, placement))
             if law is None:
                 continue
@@ -129,8 +136,8 @@ def plot_transfer_curves(root: str | Path, path: Path) -> None:
             ramp = ~rec.hold
             model = law.reading(rec.time_s, rec.force_N)
             for ax in axes[:, col]:
-                ax.plot(rec.force_N[ramp], rec.readings_N[name][ramp], "o", ms=2.5, color=c)
-                ax.plot(rec.force_N[ramp], model[ramp], "-", color=c, lw=1, label=design)
+                ax.plot(rec.force_N[ramp], rec.readings_N[name][ramp], marker, ms=2.5, color=c)
+                ax.plot(rec.force_N[ramp], model[ramp], line, color=c, lw=1.2, label=design)
         for row, (top, what) in enumerate(((20.0, "0-20 N"), (3.0, "0-3 N: the dead bands"))):
             ax = axes[row, col]
             ax.set_title(f"{placement} (4 x 4 mm patch), {what}")
