@@ -9,7 +9,7 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 | ``world`` | ViewCoordinates | static | right-handed, +Z up |
 | ``world/bodies/{body}`` | Transform3D | per frame | world pose of a ``pro_*``/``hum_*`` body |
 | ``world/bodies/{body}/{geom}`` | a shape (1) | static | the geom in its body's frame, colour |
-| ``world/bodies/{body}/pro_skin_{region}`` | a shape (1) | colour per frame | see (2) |
+| ``world/bodies/{body}/pro_skin_{key}`` | a shape (1) | colour per frame | see (2) |
 | ``world/hands`` | Points3D | per frame | one labelled point at each palm: which hand is which |
 | ``world/contacts/points`` | Points3D | per frame | contact points, sized and coloured by force |
 | ``world/contacts/normals`` | Arrows3D | per frame | contact normals, ARROW_M_PER_N m per N |
@@ -19,9 +19,10 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 | ``partner/phase`` | TextLog | at changes | partner phase (``reach``, ``grip``, ...) |
 
 (1) Capsules3D, Ellipsoids3D, Boxes3D, Cylinders3D or Mesh3D (the palm's convex skin and tissue
-pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom: shape and label
-``{region}`` static (meshes: no label; the label shown only on regions that carry load),
-colour force_colors(force) per frame. ``forces/{region}`` also holds a static SeriesLines (its
+pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom (a phalanx's
+own, or the palm's one surface for Palm1, Palm2, Back1 and Back2): shape and label ``{region}``
+static (meshes: no label; the label shown only on regions that carry load), colour
+force_colors(force) per frame, a skin of several zones by its most loaded one. ``forces/{region}`` also holds a static SeriesLines (its
 name with the unit, and a colour of its own: no two regions share one). (3) When the frames carry
 sensor readings; the series is named ``{region} ({placement})`` and its view stands beside the
 forces' view, so that a region's reading and its contact force are read side by side.
@@ -341,7 +342,9 @@ def _log_recording(
     log, send = partial(rec.log, strict=True), partial(rec.send_columns, strict=True)
     time = [rr.TimeColumn(_TIMELINE, duration=frames.time_s)]
     info = regions(model, "pro_")
-    skin = {info[r].geom: r for r in frames.region_names}
+    skin: dict[str, list[str]] = {}  # skin geom -> the regions it carries (the palm: 4 zones)
+    for r in frames.region_names:
+        skin.setdefault(info[r].geom, []).append(r)
     forces = {r: frames.region_force_N[:, k] for k, r in enumerate(frames.region_names)}
     log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     loaded = set(_loaded(frames))
@@ -356,19 +359,21 @@ def _log_recording(
         archetype, fields = shape
         name = model.geom(g).name or f"geom{g}"
         entity = _path("world", "bodies", body, name)
-        region = skin.get(name)
+        carried = skin.get(name)
         colour = _colour_field(archetype)
-        if region is None:  # a plain geom: static colour (the partner's tissue blue, as in
+        if carried is None:  # a plain geom: static colour (the partner's tissue blue, as in
             # every picture)
             rgba = np.asarray(partner.get(g, model.geom_rgba[g]))
             fields[colour] = [np.round(255 * rgba).astype(np.uint8)]
             log(entity, archetype.from_fields(**fields), static=True)
             continue
         if archetype is not rr.Mesh3D:
-            fields["labels"] = [region]
-            fields["show_labels"] = region in loaded
+            fields["labels"] = ["/".join(carried)]
+            fields["show_labels"] = any(r in loaded for r in carried)
         log(entity, archetype.from_fields(**fields), static=True)
-        colors = force_colors(forces[region], max_force_N=max_force_N)
+        # a skin of several zones (the palm's surface) shows its most loaded zone
+        colors = force_colors(np.max([forces[r] for r in carried], axis=0),
+                              max_force_N=max_force_N)
         send(entity, time, archetype.columns(**{colour: colors}))
 
     pos, quat = _body_poses(model, frames, bodies)
