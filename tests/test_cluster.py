@@ -12,17 +12,14 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import signal
 import socket
-import subprocess
 import sys
 import textwrap
 import warnings
 
 import pytest
 from click.testing import CliRunner
-from conftest import sigint_default
+from conftest import interrupt_when, start_interruptible
 
 import softhand.parallel
 from softhand.cli import main
@@ -33,7 +30,6 @@ from softhand.parallel import TaskError, run_tasks
 DESIGNS = ["pocket2-sil", "solid-pu"]
 SETTINGS = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, max_force_N=2.0, threads=1)
 FAST = ["--mode", "2d", "--mesh", "coarse", "--hold", "0", "--max-force", "2"]
-HANG_S = 60
 
 
 @pytest.fixture(scope="module")
@@ -206,20 +202,10 @@ def test_ctrl_c_keeps_the_finished_task_and_drops_the_running_one(cluster, tmp_p
                           "interrupted": out.interrupted}}), flush=True)
         sys.exit(130 if out.interrupted else 0)
     """))
-    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=sigint_default)
-    seen = ""
-    while "done fast" not in seen:
-        ch = proc.stdout.read(1)
-        if not ch:
-            break
-        seen += ch
-    assert "done fast" in seen, (seen, proc.stderr.read())
-    os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=HANG_S)
+    proc = start_interruptible([sys.executable, str(script)])
+    out, err = interrupt_when(proc, proc.stdout, "done fast")
     assert proc.returncode == 130, err
-    outcome = json.loads((seen + out)[(seen + out).index('{"results"'):].strip())
+    outcome = json.loads(out[out.index('{"results"'):].strip())
     assert outcome == {"results": {"fast": None}, "missing": ["slow"], "interrupted": True}
     assert "Traceback" not in err
 

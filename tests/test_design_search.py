@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import sigint_default
+from conftest import interrupt_when, start_interruptible
 
 from softhand.cli import main
 from softhand.design.evaluate import evaluate, screen_settings
@@ -293,26 +293,14 @@ def test_search_command_bad_input_is_one_line_naming_the_flag(tmp_path, args, wo
 def test_ctrl_c_keeps_the_journal_and_resume_continues_the_study(tmp_path):
     """SIGINT mid-screen: exit 130 with one line saying how to resume; --resume then finishes the
     same study (the finished trials kept, the one running when Ctrl-C came not counted)."""
-    import os
-    import signal
     import subprocess
     import sys
 
     out = tmp_path / "ds"
     cmd = [sys.executable, "-m", "softhand.cli", "design", "search", "--mesh", "coarse",
            "--out", str(out), "--check", "0", "--materials", "dragon-skin-10"]
-    proc = subprocess.Popen([*cmd, "--trials", "500"], start_new_session=True, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            preexec_fn=sigint_default)
-    seen = ""
-    while " 3/500" not in seen:
-        ch = proc.stderr.read(1)
-        if not ch:
-            break
-        seen += ch
-    assert " 3/500" in seen, seen[-500:]
-    os.killpg(proc.pid, signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    proc = start_interruptible([*cmd, "--trials", "500"])
+    _, err = interrupt_when(proc, proc.stderr, " 3/500")
     assert proc.returncode == 130, err
     line = err.strip().splitlines()[-1]
     assert line.startswith("interrupted: ") and "--resume continues" in line, line

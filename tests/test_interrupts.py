@@ -17,28 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import sigint_default
-
-HANG_S = 60
-
-
-def _start(args: list[str], **kw) -> subprocess.Popen:
-    return subprocess.Popen(args, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default, **kw)
-
-
-def _interrupt_when(proc: subprocess.Popen, stream, marker: str) -> tuple[str, str]:
-    """Read ``stream`` until ``marker`` appears, then SIGINT the group; return stdout, stderr."""
-    seen = ""
-    while marker not in seen:
-        ch = stream.read(1)
-        if not ch:
-            break
-        seen += ch
-    assert marker in seen, f"{marker!r} never appeared: {seen[-500:]}"
-    os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=HANG_S)
-    return (seen + out, err) if stream is proc.stdout else (out, seen + err)
+from conftest import HANG_S, interrupt_when, start_interruptible
 
 
 def test_run_tasks_keeps_the_finished_task_and_stops_the_running_one(tmp_path):
@@ -58,8 +37,8 @@ def test_run_tasks_keeps_the_finished_task_and_stops_the_running_one(tmp_path):
             sys.exit(130 if out.interrupted else 0)
     """))
     env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
-    proc = _start([sys.executable, str(script)], env=env, cwd=tmp_path)
-    out, err = _interrupt_when(proc, proc.stdout, "done fast")
+    proc = start_interruptible([sys.executable, str(script)], env=env, cwd=tmp_path)
+    out, err = interrupt_when(proc, proc.stdout, "done fast")
     assert proc.returncode == 130, err
     outcome = json.loads(out[out.index('{"results"'):].strip())
     assert outcome == {"results": {"fast": 0.05}, "missing": ["slow"], "interrupted": True}
@@ -68,10 +47,10 @@ def test_run_tasks_keeps_the_finished_task_and_stops_the_running_one(tmp_path):
 @pytest.mark.slow
 def test_fe_sweep_writes_the_finished_design_and_lists_the_missing_one(tmp_path):
     out_dir = tmp_path / "fe"
-    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
+    proc = start_interruptible([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
                    "--mesh", "fine", "--hold", "0", "--max-force", "10", "--threads", "2",
                    "--design", "solid-pu", "--design", "pocket2-sil", "--out", str(out_dir)])
-    _, err = _interrupt_when(proc, proc.stderr, "1/2")
+    _, err = interrupt_when(proc, proc.stderr, "1/2")
     assert proc.returncode == 130, err
     last = err.strip().splitlines()[-1]
     assert last.startswith("interrupted (Ctrl-C): wrote 1 of 2 designs") and "pocket2-sil" in last
@@ -85,9 +64,9 @@ def test_fe_sweep_writes_the_finished_design_and_lists_the_missing_one(tmp_path)
 
 def test_interrupted_single_run_writes_nothing(tmp_path):
     out_dir = tmp_path / "out"
-    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "indent", "pocket2-sil",
+    proc = start_interruptible([sys.executable, "-m", "softhand.cli", "fe", "indent", "pocket2-sil",
                    "--mode", "2d", "--mesh", "fine", "--max-force", "10", "--out", str(out_dir)])
-    _, err = _interrupt_when(proc, proc.stderr, "pocket2-sil:")
+    _, err = interrupt_when(proc, proc.stderr, "pocket2-sil:")
     assert proc.returncode == 130
     assert err.strip().splitlines()[-1] == "interrupted (Ctrl-C); nothing was written"
     assert not out_dir.exists()
@@ -142,7 +121,7 @@ def test_sigterm_to_the_command_alone_stops_its_workers_too(tmp_path):
     stops as on Ctrl-C, keeps the finished design, exits 130 and leaves no worker running (before,
     the default action killed the main process alone and its two workers ran on as orphans)."""
     out_dir = tmp_path / "fe"
-    proc = _start([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
+    proc = start_interruptible([sys.executable, "-m", "softhand.cli", "fe", "sweep", "--mode", "2d",
                    "--mesh", "fine", "--hold", "0", "--max-force", "10", "--threads", "2",
                    "--design", "solid-pu", "--design", "pocket2-sil", "--out", str(out_dir)])
     seen = ""
