@@ -239,15 +239,28 @@ def calibrate(report_path, ranks, out_dir, force) -> None:
             record = run_fe_folders(cand, fe, progress=progress_line)
             (fe / "record.json").write_text(json.dumps(record, indent=1) + "\n")
         progress_line(f"{name}: calibrating ({cand.label})")
+        shown = _in_repo(path)
         cal = calibrate_candidate(cand, name, fe, provenance={
-            "search": {"report": str(path), "trial": w["trial"], "rank": rank,
+            "search": {"report": shown, "trial": w["trial"], "rank": rank,
                        "seed": data.get("seed"), "sampler": data.get("sampler"),
                        "git_revision": (data.get("machine") or {}).get("git_revision")},
-            "command": f"softhand design calibrate --report {report_path} --winner {rank}"
-                       + (f" --out {out_dir}" if out_dir else "")})
+            "command": f"softhand design calibrate --report {shown} --winner {rank}"
+                       + (f" --out {_in_repo(Path(out_dir))}" if out_dir else "")
+                       + (" --force" if force else "")})
         written = save_calibration(cal, out)
         top = cal.provenance["design"]["calibrated_max_N"]
         soft = cal.representations.get("soft-contact")
         click.echo(f"{written}: law to {top:.3g} N; soft contact RMS "
                    f"{soft.rms_error_pct_of_2N:.2f} % of 2 N; pair laws: "
                    f"{', '.join(cal.pair_laws) or 'none'}")
+
+
+def _in_repo(path) -> str:
+    """``path`` relative to the checkout when it lies inside it (provenance that does not name
+    this machine's folders), else as given."""
+    from pathlib import Path
+
+    from softhand.paths import REPO_ROOT
+
+    p = Path(path).resolve()
+    return str(p.relative_to(REPO_ROOT)) if REPO_ROOT in p.parents else str(path)
