@@ -153,9 +153,10 @@ def calibrate_candidate(candidate: Candidate, name: str, fe_dir: str | Path, *,
     curves of the tissue's reference design).
 
     The provenance gains ``design``: the variables, the library materials (names, constants,
-    sources), the FE folders' depth limits and reach, ``calibrated_max_N`` (the largest force
-    of the 0.5 mm/s curve: the law's range) and the caller's ``provenance`` (search seed, trial,
-    command).
+    sources), the FE folders' depth limits and reach, ``fe_max_N`` (the largest force of the
+    0.5 mm/s curve), ``calibrated_max_N`` (the plate pair law's range: that force, or just
+    under what the fitted law's ramp reaches where that is less) and the caller's
+    ``provenance`` (search seed, trial, command).
 
     Raises:
         FileNotFoundError, ValueError: as `calibrate_design`, for missing or mixed curves.
@@ -173,7 +174,10 @@ def calibrate_candidate(candidate: Candidate, name: str, fe_dir: str | Path, *,
         row = summary["designs"].get(design.name, {})
         folders[sub] = {"max_depth_mm": summary["provenance"]["settings"]["max_depth_mm"],
                         "peak_force_N": row.get("peak_force_N"), "status": row.get("status")}
-    top = float(_plate_curve(root, design.name).force_N.max())
+    fe_top = float(_plate_curve(root, design.name).force_N.max())
+    # the law's range: the pair law's (the curve's end, or just under what the law's ramp
+    # reaches where it ends flat: softhand.skin.calibrate._law_top)
+    top = cal.pair_law.calibrated_max_N if cal.pair_law is not None else fe_top
     info = {
         "variables": candidate.to_dict(),
         "label": candidate.label,
@@ -185,10 +189,12 @@ def calibrate_candidate(candidate: Candidate, name: str, fe_dir: str | Path, *,
                                               else "pu"))},
         "fe_design": design.name,
         "fe_folders": folders,
+        "fe_max_N": fe_top,
         "calibrated_max_N": top,
         "range_note": (f"the FE of this design stops short of 20 N; its law and pair law are "
-                       f"calibrated to {top:.3g} N, the force of its 0.5 mm/s curve, and the "
-                       "handshake flags contacts beyond the pair law's calibrated_max_N")
+                       f"calibrated to {top:.3g} N (its 0.5 mm/s curve ends at {fe_top:.3g} "
+                       "N), and the handshake flags contacts beyond the pair law's "
+                       "calibrated_max_N")
         if top < FE_SETTINGS.max_force_N * 0.99 else None,
         **(provenance or {}),
     }

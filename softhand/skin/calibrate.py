@@ -535,7 +535,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         t0 = time.perf_counter()
         tissue = reference_law(HUMAN)
         initial = own["soft-contact"]  # the skin's own soft contact, fitted above
-        top = float(main.force_N.max())
+        top = _law_top(law, float(main.force_N.max()))
         pair = fit_pair_law(law, tissue, skin_top_N=top,
                             skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
@@ -551,6 +551,16 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
             provenance["pair_laws_fit_s"] = time.perf_counter() - t0
             return SkinCalibration(design, law, results, provenance, pair, by_class)
     return SkinCalibration(design, law, results, provenance, pair)
+
+
+def _law_top(law: SkinLaw, top_N: float, speed_mm_s: float = 0.5) -> float:
+    """``top_N`` (an FE curve's largest force), or just under the largest force of ``law``'s
+    ramp at ``speed_mm_s`` where that is less: a law fitted to a curve that ends where a soft
+    design's FE stopped (`softhand.design.skins`) ends flat and its ramp may fall a few % short
+    of the curve's end. A law fitted to 20 N reaches it (extrapolated past its end): unchanged."""
+    e = law.elastic
+    d = np.linspace(0.0, e.max_mm / max(law.prony.g_inf, 1e-6) + 1.0, 4000)
+    return min(top_N, 0.999 * float(law.force(d / speed_mm_s, d).max()))
 
 
 def class_folders(design: str, fe_dir: str | Path) -> list[str]:
@@ -638,7 +648,7 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
             continue
         curve, mesh = found
         skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
-        top = float(curve.force_N.max())
+        top = _law_top(skin, float(curve.force_N.max()))
         pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=reference_mass_kg, initial=initial)
