@@ -41,6 +41,29 @@ def test_elastic_law_is_monotone_zero_at_zero_and_straight_past_its_range():
     assert law.displacement_at(float(law.force(1.7))) == pytest.approx(1.7, abs=1e-9)
 
 
+def test_a_law_that_ends_flat_reaches_its_end_and_its_ramp_peak():
+    """A law fitted to a curve that stops where a soft design's FE did can end flat (end
+    stiffness 0): its end force is reached at its end, no more; its QLV ramp rises, then relaxes
+    past the end, and the force it reaches is found on the rise."""
+    from softhand.laws import SkinLaw
+
+    flat = ElasticLaw(knot_vector(3.0, 6), np.array([0.2, 0.5, 1.0, 1.5, 1.0, 0.0]))
+    assert flat.end_stiffness == 0.0
+    f_end = float(flat.force(flat.max_mm))
+    assert flat.displacement_at(f_end) == pytest.approx(flat.max_mm, abs=1e-9)
+    with pytest.raises(ValueError, match="never reaches"):
+        flat.displacement_at(1.01 * f_end)
+    law = SkinLaw("flat-end", flat, Prony((0.2,), (1.0,)))
+    d = np.linspace(0.0, 6.0, 4001)
+    ramp = law.force(d / 0.5, d)
+    assert ramp[-1] < ramp.max()  # it falls past the end: the case this handles
+    peak = 0.995 * float(ramp.max())
+    x = law.quasi_static_displacement_at(peak, 0.5)
+    on_ramp = np.interp(x, d, ramp)  # the ramp's force at x (a ramp from 0, not a point)
+    assert on_ramp == pytest.approx(peak, rel=2e-3)
+    assert x <= d[np.argmax(ramp)] + 1e-9
+
+
 def test_elastic_law_rejects_negative_coefficients():
     with pytest.raises(ValueError, match="coefficients must be >= 0"):
         ElasticLaw(knot_vector(2.0, 4), np.array([1.0, -0.1, 1.0, 1.0]))

@@ -182,3 +182,85 @@ def samplers_markdown(data) -> str:
                      f"{', '.join('' if v is None else f'{v:.1f}' for v in r['best_lifelike_pct'])}"
                      f" | {', '.join(f'{v:.0f}' for v in r['wall_s'])} |")
     return "\n".join(lines) + "\n"
+
+
+@design.command("calibrate")
+@click.option("--report", "report_path", default=str(REPORTS_DIR / "design-search.json"),
+              show_default=True, help="A search's designs.json (its winners are calibrated).")
+@click.option("--winner", "ranks", multiple=True, type=click.IntRange(min=1),
+              help="Rank of a winner in --report (repeatable) [default: every winner].")
+@click.option("--out", "out_dir", default=None,
+              help="Folder of the skin files, design-trialN.json, with the FE curves under "
+                   "fe/design-trialN/ [default: calibration/designs].")
+@click.option("--force", is_flag=True,
+              help="Allow writing into the shipped calibration/ (the default --out).")
+def calibrate(report_path, ranks, out_dir, force) -> None:
+    """A calibrated skin of each winner of a search: its FE curves (3D, the shipped setting,
+    to 20 N or as far as the FE reaches), then `softhand calibrate`'s fit (law, MuJoCo
+    representations, pair laws), for `softhand handshake --design PATH`."""
+    import json
+    from pathlib import Path
+
+    from softhand.design.search import candidate_of
+    from softhand.design.skins import (
+        calibrate_candidate,
+        fe_folders_match,
+        run_fe_folders,
+        skin_name,
+    )
+    from softhand.io import read_json
+    from softhand.paths import CALIBRATION_DIR
+    from softhand.skin.files import save_calibration
+
+    path = Path(report_path)
+    if not path.is_file():
+        bad(f"--report {report_path!r}: no such file (expected a search's designs.json)")
+    try:
+        data = read_json(path)
+        winners = data["winners"]
+        rows = [candidate_of(w) for w in winners]
+    except (ValueError, KeyError, TypeError) as exc:
+        bad(f"--report {report_path!r}: not a design search's designs.json ({exc})")
+    if not winners:
+        bad(f"--report {report_path!r}: has no winners")
+    for r in ranks:
+        if r > len(winners):
+            bad(f"--winner {r}: --report has {len(winners)} winners; allowed 1-{len(winners)}")
+    out = checked_dir(out_dir or str(CALIBRATION_DIR / "designs"), "--out", force=force,
+                      need_bytes=2e7)
+    for rank in ranks or range(1, len(winners) + 1):
+        w, cand = winners[rank - 1], rows[rank - 1]
+        name = skin_name(w["trial"])
+        fe = out / "fe" / name
+        if fe_folders_match(cand, fe):
+            progress_line(f"{name}: the FE curves in {fe} are this design's (reused)")
+        else:
+            progress_line(f"{name}: FE curves into {fe}")
+            record = run_fe_folders(cand, fe, progress=progress_line)
+            (fe / "record.json").write_text(json.dumps(record, indent=1) + "\n")
+        progress_line(f"{name}: calibrating ({cand.label})")
+        shown = _in_repo(path)
+        cal = calibrate_candidate(cand, name, fe, provenance={
+            "search": {"report": shown, "trial": w["trial"], "rank": rank,
+                       "seed": data.get("seed"), "sampler": data.get("sampler"),
+                       "git_revision": (data.get("machine") or {}).get("git_revision")},
+            "command": f"softhand design calibrate --report {shown} --winner {rank}"
+                       + (f" --out {_in_repo(Path(out_dir))}" if out_dir else "")
+                       + (" --force" if force else "")})
+        written = save_calibration(cal, out)
+        top = cal.provenance["design"]["calibrated_max_N"]
+        soft = cal.representations.get("soft-contact")
+        click.echo(f"{written}: law to {top:.3g} N; soft contact RMS "
+                   f"{soft.rms_error_pct_of_2N:.2f} % of 2 N; pair laws: "
+                   f"{', '.join(cal.pair_laws) or 'none'}")
+
+
+def _in_repo(path) -> str:
+    """``path`` relative to the checkout when it lies inside it (provenance that does not name
+    this machine's folders), else as given."""
+    from pathlib import Path
+
+    from softhand.paths import REPO_ROOT
+
+    p = Path(path).resolve()
+    return str(p.relative_to(REPO_ROOT)) if REPO_ROOT in p.parents else str(path)

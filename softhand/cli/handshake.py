@@ -54,7 +54,10 @@ class _ArmNumber(Number):
         return super().convert(value, param, ctx)
 
 @main.command("handshake")
-@click.option("--design", default=None, help="Skin of every region [default: pocket2-sil].")
+@click.option("--design", default=None,
+              help="Skin of every region: a skin name, or the path of a calibration file "
+                   "(*.json, e.g. a searched design's from `softhand design calibrate`) "
+                   "[default: pocket2-sil].")
 @click.option("--skin", "skin_items", multiple=True, metavar="REGION=DESIGN[@REPRESENTATION]",
               help="Skin of one region (repeatable), e.g. Index2=rigid or "
                    "Index2=pocket2-pu@soft-contact+relaxation; Palm=DESIGN for the palm's one "
@@ -107,6 +110,7 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
 
     if design is not None and not design.strip():
         bad("--design '': expected a skin name, e.g. pocket2-sil")
+    design_file, design, calibration_dir = design_of(design)
     overrides = parse_skin_overrides(skin_items)
     record = checked_file(record_path, "--record", ".rrd", need_bytes=_RECORDING_BYTES)
     placement = parse_placement_items(placement_items)
@@ -123,7 +127,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     try:  # skins, sensors and their calibration files, before the episode
         env = HandshakeEnv(design=design, skins=overrides, representation=representation,
                            timestep_s=timestep_s, sensor=spec, sensor_placement=placement,
-                           partner_size=size, hand=hand, contact_laws=contact_laws, **arms)
+                           partner_size=size, hand=hand, contact_laws=contact_laws,
+                           calibration_dir=calibration_dir, **arms)
     except ValueError as exc:
         msg = str(exc)
         if msg.startswith("sensor "):
@@ -146,7 +151,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
     summary = run.summary()
     frame_skip = int(env.frame_skip)
     summary["settings"] = {
-        "hand": hand, "design": design, "skins": dict(overrides or {}),
+        "hand": hand, "design": design, "design_file": design_file,
+        "skins": dict(overrides or {}),
         "representation": representation, "controller": controller,
         "signal": signal if controller != "open-loop" else None, "target_N": target_N,
         "seed": seed, "timestep_s": timestep_s, "physics_steps_per_env_step": frame_skip,
@@ -273,6 +279,21 @@ def _sensored_hand(hand: str, skins: str, controllers: str) -> str:
     with its ``skins`` and ``controllers`` (texts)."""
     return ("the relaxed human hand (the paper's protocol)" if hand == "human"
             else f"prosthetic hand, {skins}, {controllers}")
+
+
+def design_of(value: str | None) -> tuple[str | None, str | None, str | None]:
+    """--design VALUE as (the file, the skin name, the calibration folder): a skin name is
+    itself, in the shipped folder (None, name, None); a calibration file's path is read and
+    checked now (`softhand.skin.files.skin_file_folder`), one line naming the flag if bad."""
+    from softhand.skin.files import is_skin_path, skin_file_folder
+
+    if value is None or not is_skin_path(value):
+        return None, value, None
+    try:
+        name, folder = skin_file_folder(value)
+    except ValueError as exc:
+        bad(f"--design {value!r}: {exc}")
+    return value, name, str(folder)
 
 
 def _check_hand(hand: str, controller: str, **prosthetic_only) -> None:

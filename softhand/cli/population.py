@@ -17,6 +17,7 @@ from softhand.cli.handshake import (
     _check_hand,
     _header,
     _sensored_hand,
+    design_of,
 )
 from softhand.cli.inputs import (
     OPT_CLUSTER,
@@ -35,7 +36,9 @@ from softhand.paper import paper
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
               help="Seed of the population, 0 <= seed < 2^32.")
 @click.option("--design", "designs", multiple=True,
-              help="Skin of every region (repeatable: a sweep) [default: pocket2-sil].")
+              help="Skin of every region (repeatable: a sweep): a skin name, or the path of a "
+                   "calibration file (*.json, e.g. from `softhand design calibrate`) "
+                   "[default: pocket2-sil].")
 @click.option("--controller", "controllers", type=click.Choice(["neutral", "open-loop", "force"]),
               multiple=True, default=("neutral",), show_default=True,
               help="Controller of the prosthetic hand (repeatable: a sweep).")
@@ -79,24 +82,27 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
             bad("--design '': expected a skin name, e.g. pocket2-sil")
     for controller in controllers:
         _check_hand(hand, controller, design=tuple(d for d in designs if d is not None))
+    files = {d: design_of(d) for d in designs}  # a calibration file: read and checked now
+    folders = {d: {"calibration_dir": f[2]} if f[2] else {} for d, f in files.items()}
     combos = [(d, c) for d in designs for c in controllers]
     sweep = len(combos) > 1
     out = checked_dir(out_dir, "--out", need_bytes=(2e6 + 4e3 * n) * len(combos))
     for design in designs:
         try:
             # the skin and its files, before any work
-            HandshakeEnv(design=design, hand=hand, contact_laws=contact_laws)
+            HandshakeEnv(design=files[design][1], hand=hand, contact_laws=contact_laws,
+                         **folders[design])
         except ValueError as exc:
             bad(str(exc) if design is None else f"--design {design!r}: {exc}")
     partners = sample_partners(n, seed)
-    skins = [d or DEFAULT_DESIGN for d in designs]
+    skins = [files[d][1] or DEFAULT_DESIGN for d in designs]
     what = f"{n} partners" + (f" x {len(combos)} combinations" if sweep else "")
     click.echo(_header("population", f"{what}, seed {seed}", _sensored_hand(
         hand, f"{skins[0]} on every region" if len(skins) == 1 else f"skins {', '.join(skins)}",
         f"controller{'s' if len(controllers) > 1 else ''} {', '.join(controllers)}")))
     names = [f"{d}-{c}" for d in skins for c in controllers]
-    tasks = [((k, p.index), (p, {"design": d, "controller": c, "hand": hand,
-                                 "contact_laws": contact_laws}))
+    tasks = [((k, p.index), (p, {"design": files[d][1], "controller": c, "hand": hand,
+                                 "contact_laws": contact_laws, **folders[d]}))
              for k, (d, c) in enumerate(combos) for p in partners]  # a combination's in a row
     done = []
     with progress_bar(what, disable=False) as update:
@@ -114,7 +120,9 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
             missing.update({str(i): str(e) for (j, i), e in batch.errors.items() if j == k})
             missing_all.update({f"{name}/{i}" if sweep else i: why for i, why in missing.items()})
             meta = {"n": n, "seed": seed, "hand": hand,
-                    "design": "human tissue" if hand == "human" else design or DEFAULT_DESIGN,
+                    "design": ("human tissue" if hand == "human"
+                               else files[design][1] or DEFAULT_DESIGN),
+                    "design_file": files[design][0],
                     "controller": controller, "contact_laws": contact_laws,
                     "finished": len(results), "missing": missing,
                     "version": __version__, "git_revision": revision, "command": command}
@@ -129,7 +137,8 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
                 if sweep:
                     click.echo(f"{name}: {len(results)} of {n} partners")
                 _print_population(summary)
-            listed.append({"design": meta["design"], "controller": controller,
+            listed.append({"design": meta["design"], "design_file": meta["design_file"],
+                           "controller": controller,
                            "folder": name if results else None, "finished": len(results),
                            "missing": missing, "regions_over_2N_in_most_partners": [
                                r for r, v in summary.items() if v["over_2N_pct"] > 50]})

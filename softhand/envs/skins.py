@@ -84,7 +84,8 @@ SKIN_CHOICES = (*[n for n in skin_names() if n != HUMAN], "rigid")
 
 
 def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None = None,
-                representation: str | None = None) -> tuple[dict[str, str], dict[str, str]]:
+                representation: str | None = None, *, calibrated: tuple[str, ...] = ()
+                ) -> tuple[dict[str, str], dict[str, str]]:
     """Region -> skin design and region -> representation: ``design`` (default the most
     lifelike) in ``representation`` (default ``soft-contact``) everywhere, then ``overrides``,
     each ``DESIGN`` or ``DESIGN@REPRESENTATION``, keyed by region or by a surface's key
@@ -92,6 +93,9 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
 
     A ``rigid`` region (the design, or any design ``@rigid``) is MuJoCo's stock contact against
     the tissue: its design is ``rigid`` and its representation ``rigid``.
+
+    ``calibrated``: skins besides `SKIN_CHOICES` that the scene's calibration folder holds (a
+    searched design's file, `softhand.skin.files.skin_file_folder`).
 
     None is the default; an empty string is not (it is refused like any unknown name).
 
@@ -104,8 +108,9 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
     rep = _hand_representation(DEFAULT_REPRESENTATION if representation is None
                                else representation, "representation")
     design = DEFAULT_DESIGN if design is None else design
-    if design not in SKIN_CHOICES:
-        raise ValueError(f"skin design {design!r} is unknown; allowed: {', '.join(SKIN_CHOICES)}")
+    choices = (*SKIN_CHOICES, *(c for c in calibrated if c not in SKIN_CHOICES and c != HUMAN))
+    if design not in choices:
+        raise ValueError(f"skin design {design!r} is unknown; allowed: {', '.join(choices)}")
     designs, reps = dict.fromkeys(names, design), dict.fromkeys(names, rep)
     if overrides is not None and not isinstance(overrides, Mapping):
         raise ValueError(f"skins = {overrides!r}: expected a mapping region -> DESIGN or "
@@ -121,9 +126,9 @@ def parse_skins(design: str | None = None, overrides: Mapping[str, str] | None =
             raise ValueError(f"skin {choice!r} for region {region}: expected DESIGN or "
                              f"DESIGN@REPRESENTATION (a string)")
         skin, at, own = choice.partition("@")
-        if skin not in SKIN_CHOICES:
+        if skin not in choices:
             raise ValueError(f"skin {skin!r} for region {region} is unknown; allowed: "
-                             f"{', '.join(SKIN_CHOICES)}")
+                             f"{', '.join(choices)}")
         designs[region] = skin
         if at:  # "DESIGN@" names an empty representation: refused, not the default
             reps[region] = _hand_representation(own, f"representation for region {region}")

@@ -58,7 +58,7 @@ from softhand.hands.partner import PARTNER_JOINTS
 from softhand.hands.prosthetic import paper_regions
 from softhand.laws.references import HUMAN
 from softhand.sensors.device import FLEXIFORCE_A101, SensorChain, SensorSpec
-from softhand.skin.files import SKINS_DIR
+from softhand.skin.files import SKINS_DIR, shipped_skins
 from softhand.validate import check_number, check_path, show
 from softhand.warn import warn_at_caller
 
@@ -187,7 +187,9 @@ class TwoHandTouchEnv(gym.Env):
             self.skins = dict.fromkeys(paper_regions(), HUMAN)
             self.representations = dict.fromkeys(paper_regions(), "soft-contact")
         else:
-            self.skins, self.representations = parse_skins(design, skins, representation)
+            extra = () if calibration_dir is None else tuple(shipped_skins(calibration_dir))
+            self.skins, self.representations = parse_skins(design, skins, representation,
+                                                           calibrated=extra)
         self.frame_skip = int(frame_skip)
         self.observe = observe
         # frames per second of a rendered episode: one picture per env step

@@ -139,7 +139,7 @@ class ElasticLaw:
             raise ValueError(f"force_N = {float(bad)!r} must be finite and > 0")
         f_end = float(self.force(self.max_mm))
         beyond = f >= f_end
-        if np.any(beyond) and self.end_stiffness <= 0:
+        if np.any(f > f_end) and self.end_stiffness <= 0:  # f_end itself is reached at max_mm
             raise ValueError(f"the law never reaches {float(f.max())} N (at most {f_end:.4g} N)")
         lo, hi = np.zeros_like(f), np.full_like(f, self.max_mm)
         for _ in range(60):

@@ -347,12 +347,20 @@ class SkinLaw:
         """Indentation reached at ``force_N`` in a ramp at ``speed_mm_s`` (as in the paper)."""
         if not np.isfinite(speed_mm_s) or speed_mm_s <= 0:
             raise ValueError(f"speed_mm_s = {speed_mm_s!r} must be finite and > 0")
-        top = self.elastic.displacement_at(force_N) / max(self.prony.g_inf, 1e-6) + 1.0
-        d = np.linspace(0.0, top, 4000)
-        f = self.force(d / speed_mm_s, d)
-        if f[-1] < force_N:
-            raise ValueError(f"{self.name}: {force_N} N is not reached by {top:.3g} mm")
-        return float(monotone_inverse(force_N, d, f))
+        g_inf = max(self.prony.g_inf, 1e-6)
+        # the elastic depth of the force, past it by the relaxation's share; where the ramp has
+        # not reached the force there (a law that ends flat, fitted to a soft design's curve that
+        # stops where its FE did, reaches its largest force near its end), to the law's end
+        for top in (self.elastic.displacement_at(force_N) / g_inf + 1.0,
+                    max(self.elastic.displacement_at(force_N), self.elastic.max_mm) / g_inf + 1.0):
+            d = np.linspace(0.0, top, 4000)
+            f = self.force(d / speed_mm_s, d)
+            # up to the ramp's largest force: a law that ends flat relaxes past its end, and
+            # its ramp falls there
+            k = int(np.argmax(f))
+            if f[k] >= force_N:
+                return float(monotone_inverse(force_N, d[:k + 1], f[:k + 1]))
+        raise ValueError(f"{self.name}: {force_N} N is not reached by {top:.3g} mm")
 
     def to_dict(self) -> dict:
         return {"name": self.name, "elastic": self.elastic.to_dict(),

@@ -476,16 +476,21 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
                      representations: tuple[str, ...] = ("rigid", "soft-contact",
                                                          "soft-contact+relaxation"),
                      settings: RigSettings | None = None,
-                     law: SkinLaw | None = None, curves: list[Curve] | None = None
+                     law: SkinLaw | None = None, curves: list[Curve] | None = None,
+                     fe_design: str | None = None, tissue_fe_dir: str | Path | None = None
                      ) -> SkinCalibration:
     """Fit the law and every asked representation of ``design``; see the module docstring.
 
     ``law`` and ``curves`` replace the FE files (reference skins, tests with synthetic data).
     ``settings`` default: the rig at 1 ms with the calibration mass.
+    ``fe_design``: the name the curves of ``design`` have in ``fe_dir`` (default ``design``):
+    a searched design's curves are written under its FE slot layout's name
+    (`softhand.design.skins`). ``tissue_fe_dir``: the folder with the curves of
+    `TISSUE_REFERENCE_DESIGN` behind the tissue's finger law (default ``fe_dir``).
     """
     settings = settings or RigSettings(mass_kg=CALIBRATION_MASS_KG)
     if curves is None:
-        fit_curves, val_curves = fe_curves(design, fe_dir)
+        fit_curves, val_curves = fe_curves(fe_design or design, fe_dir)
     else:
         fit_curves, val_curves = list(curves), []
     t0 = time.perf_counter()
@@ -530,7 +535,7 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
         t0 = time.perf_counter()
         tissue = reference_law(HUMAN)
         initial = own["soft-contact"]  # the skin's own soft contact, fitted above
-        top = float(main.force_N.max())
+        top = _law_top(law, float(main.force_N.max()))
         pair = fit_pair_law(law, tissue, skin_top_N=top,
                             skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
@@ -541,10 +546,21 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
             t0 = time.perf_counter()
             by_class = class_pair_laws(design, law, main, fe_dir,
                                        reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
-                                       initial=initial)
+                                       initial=initial, fe_design=fe_design,
+                                       tissue_fe_dir=tissue_fe_dir)
             provenance["pair_laws_fit_s"] = time.perf_counter() - t0
             return SkinCalibration(design, law, results, provenance, pair, by_class)
     return SkinCalibration(design, law, results, provenance, pair)
+
+
+def _law_top(law: SkinLaw, top_N: float, speed_mm_s: float = 0.5) -> float:
+    """``top_N`` (an FE curve's largest force), or just under the largest force of ``law``'s
+    ramp at ``speed_mm_s`` where that is less: a law fitted to a curve that ends where a soft
+    design's FE stopped (`softhand.design.skins`) ends flat and its ramp may fall a few % short
+    of the curve's end. A law fitted to 20 N reaches it (extrapolated past its end): unchanged."""
+    e = law.elastic
+    d = np.linspace(0.0, e.max_mm / max(law.prony.g_inf, 1e-6) + 1.0, 4000)
+    return min(top_N, 0.999 * float(law.force(d / speed_mm_s, d).max()))
 
 
 def class_folders(design: str, fe_dir: str | Path) -> list[str]:
@@ -600,36 +616,39 @@ def _mesh_name(settings: dict) -> str:
 
 
 def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str | Path, *,
-                    reference_mass_kg: float, initial: SoftContactParams | None = None
+                    reference_mass_kg: float, initial: SoftContactParams | None = None,
+                    fe_design: str | None = None, tissue_fe_dir: str | Path | None = None
                     ) -> dict[str, ClassLaw]:
     """The laws of ``design`` per contact class whose FE curve ``fe_dir`` holds
     (`softhand.skin.contact_classes`), each with its pair law against the human tissue's law
     for that class. ``phalanx/flat`` is the plate law itself (against the tissue pressed like a
     finger, as a prosthetic phalanx presses a partner's palm). No tissue ``finger`` law (the FE
     folders lack `TISSUE_REFERENCE_DESIGN`'s plate or finger curve): only the classes
-    whose tissue side is flat."""
+    whose tissue side is flat. ``fe_design`` and ``tissue_fe_dir``: as in `calibrate_design`."""
     from softhand.fem.sweep import read_summary
 
     root = Path(fe_dir)
     plate = read_summary(root)
+    troot = root if tissue_fe_dir is None else Path(tissue_fe_dir)
+    tplate = read_summary(troot)
     tissue = reference_law(HUMAN)
-    ref_finger = _class_folder_curve(TISSUE_REFERENCE_DESIGN, "phalanx/finger", root, plate)
-    ref_plate = root / f"{TISSUE_REFERENCE_DESIGN}.csv"
+    ref_finger = _class_folder_curve(TISSUE_REFERENCE_DESIGN, "phalanx/finger", troot, tplate)
+    ref_plate = troot / f"{TISSUE_REFERENCE_DESIGN}.csv"
     tissues = {"flat": tissue, "finger": None}
     if ref_finger is not None and ref_plate.exists():
-        ref = _recorded_curve(ref_plate, f"{TISSUE_REFERENCE_DESIGN}@0.5mm/s", plate)
+        ref = _recorded_curve(ref_plate, f"{TISSUE_REFERENCE_DESIGN}@0.5mm/s", tplate)
         tissues["finger"] = tissue_class_law(tissue, "finger", ref, ref_finger[0])
     out: dict[str, ClassLaw] = {}
     for key in CLASSES:
         t = tissues[tissue_counterpart(key)]
         found = ((plate_curve, "default" if plate is None else _mesh_name(
             plate["provenance"]["settings"])) if key == PLATE_CLASS
-                 else _class_folder_curve(design, key, root, plate))
+                 else _class_folder_curve(fe_design or design, key, root, plate))
         if t is None or found is None:
             continue
         curve, mesh = found
         skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
-        top = float(curve.force_N.max())
+        top = _law_top(skin, float(curve.force_N.max()))
         pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=reference_mass_kg, initial=initial)
