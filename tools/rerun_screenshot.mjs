@@ -31,7 +31,7 @@ const atS = Number(execFileSync(python, ["-c",
 console.log(`mid-shake: t = ${atS.toFixed(3)} s`);
 
 const server = spawn(python, ["-m", "rerun", "--serve-web", "--web-viewer-port", "9090",
-                              "--port", "9876", rrd], { stdio: "ignore" });
+                              "--port", "9876", rrd], { stdio: "ignore", detached: true });
 const PAUSE = { x: 26, y: 864 };       // the time panel's play/pause button
 const TIME_FIELD = { x: 392, y: 864 }; // the time panel's current-time field
 let browser;
@@ -65,5 +65,5 @@ try {
   console.log(`wrote ${out} (t = ${atS.toFixed(3)} s)`);
 } finally {
   if (browser) await browser.close();
-  server.kill();
+  process.kill(-server.pid);  // its process group: `python -m rerun` runs the viewer as a child
 }
