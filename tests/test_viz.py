@@ -348,3 +348,80 @@ def test_write_video_is_a_looping_gif_of_the_frames_and_refuses_bad_input(tmp_pa
     assert not (tmp_path / "bad.gif").exists()
     with pytest.raises(ValueError, match=r"\.gif"):
         write_video(frames, tmp_path / "hs.png", fps=10)
+
+
+def _per_frame(path, entity: str, field: str) -> dict[int, object]:
+    """sim_time (ns) -> the value of a temporal component ``field`` (e.g. ``show_labels``) of
+    ``entity``, read back from the .rrd."""
+    reader = RrdReader(path)
+    values: dict[int, object] = {}
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        if chunk.entity_path.lstrip("/") != entity or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        column = next(c for c in batch.schema.names if c.endswith(f":{field}"))
+        times = batch.column("sim_time").to_numpy(zero_copy_only=False).astype("int64")
+        for t, v in zip(times.tolist(), batch.column(column).to_pylist(), strict=True):
+            values[t] = v[0] if isinstance(v, list) else v
+    return values
+
+
+def test_region_labels_show_only_on_the_few_most_loaded(model, tmp_path):
+    """A phalanx's name shows only at frames where it carries STANDOUT_FORCE_N or more and is
+    among the LABELLED_MAX most loaded such phalanges; a palm zone (a mesh, no label) does not
+    take a place."""
+    frames = synthetic_frames(model, 4)
+    forces = np.zeros((4, len(REGIONS)))
+    col = {r: REGIONS.index(r) for r in REGIONS}
+    forces[1, col["Index1"]] = 3.0  # alone over 2 N
+    forces[1, col["Index2"]] = 1.9  # under: no label
+    for r, f in {"Index1": 2.5, "Index2": 6.0, "Middle1": 5.0, "Ring1": 4.0, "Little1": 3.0,
+                 "Palm1": 9.0}.items():
+        forces[2, col[r]] = f  # five phalanges over 2 N: the three most loaded labelled
+    frames = dataclasses.replace(frames, region_force_N=forces)
+    path = record_handshake(tmp_path / "labels.rrd", model, frames)
+    info = regions(model, "pro_")
+    ns = np.round(frames.time_s * 1e9).astype("int64").tolist()
+    want = {"Index1": [False, True, False, False], "Index2": [False, False, True, False],
+            "Middle1": [False, False, True, False], "Ring1": [False, False, True, False],
+            "Little1": [False, False, False, False], "Thumb1": [False] * 4}
+    for region, shown in want.items():
+        got = _per_frame(path, f"world/bodies/{info[region].body}/{info[region].geom}",
+                         "show_labels")
+        assert [bool(got[t]) for t in ns] == shown, region
+    static = read_recording_summary(path)["entities"]
+    entry = static[f"world/bodies/{info['Index1'].body}/{info['Index1'].geom}"]
+    assert not any(c.endswith(":show_labels") for c in entry["static"])  # would override
+    assert recording.LABELLED_MAX == 3
+
+
+def test_plot_legends_are_hidden(recorded):
+    """Both time-series views (forces, sensors) hide their legends, which covered the lines."""
+    reader = RrdReader(recorded[0])
+    legends, views = [], []
+    for chunk in reader.stream(store=reader.blueprints()[0]):
+        batch = chunk.to_record_batch()
+        if "PlotLegend:visible" in batch.schema.names:
+            legends += [v[0] for v in batch.column("PlotLegend:visible").to_pylist()]
+        if "ViewBlueprint:class_identifier" in batch.schema.names:
+            views += [v[0] if isinstance(v, list) else v
+                      for v in batch.column("ViewBlueprint:class_identifier").to_pylist()]
+    assert views.count("TimeSeries") == 2
+    assert legends == [False, False]
+
+
+def test_mid_shake_is_read_from_the_recording(model, recorded, tmp_path):
+    """Halfway between the start of the shake and the next phase; the last time when the shake
+    ends the recording; a clear error when there is no shake."""
+    path, _ = recorded
+    assert read_recording_summary(path)["phases"] == [
+        (0.0, "reach"), (0.25, "grip"), (0.5, "shake"), (0.75, "release")]
+    assert recording.mid_shake_s(path) == pytest.approx(0.625)
+    short = synthetic_frames(model, 10)
+    last = record_handshake(tmp_path / "last.rrd", model, dataclasses.replace(
+        short, phase=["grip"] * 4 + ["shake"] * 6))
+    assert recording.mid_shake_s(last) == pytest.approx(0.5 * (0.04 + 0.09))
+    none = record_handshake(tmp_path / "none.rrd", model,
+                            dataclasses.replace(short, phase=["grip"] * 10))
+    with pytest.raises(ValueError, match="no shake phase"):
+        recording.mid_shake_s(none)

@@ -21,20 +21,33 @@ colours, scalars, contacts and text are sent, each series in bulk with ``send_co
 (1) Capsules3D, Ellipsoids3D, Boxes3D, Cylinders3D or Mesh3D (the palm's convex skin and tissue
 pieces; colour as its albedo), as the MuJoCo geom type. (2) A region's skin geom (a phalanx's
 own, or the palm's one surface for Palm1, Palm2, Back1 and Back2): shape and label ``{region}``
-static (meshes: no label; the label shown only on regions that carry load), colour
-force_colors(force) per frame, a skin of several zones by its most loaded one. ``forces/{region}`` also holds a static SeriesLines (its
-name with the unit, and a colour of its own: no two regions share one). (3) When the frames carry
-sensor readings; the series is named ``{region} ({placement})`` and its view stands beside the
-forces' view, so that a region's reading and its contact force are read side by side.
+static (meshes: no label), colour force_colors(force) per frame, a skin of several zones by its
+most loaded one; whether the label shows is set per frame (see "Labels" below).
+``forces/{region}`` also holds a static SeriesLines (its name with the unit, and a colour of its
+own: no two regions share one). (3) When the frames carry sensor readings; the series is named
+``{region} ({placement})`` and its view stands beside the forces' view, so that a region's reading
+and its contact force are read side by side.
 Geom and body names are MuJoCo's (``{body}`` e.g. ``pro_index_proximal``, ``hum_base``); unnamed
 geoms are called ``geom{id}``. Body poses are world poses, so the body entities are flat (not nested
 along the kinematic tree).
+
+Labels: a region's name shows in the 3D view only while it stands out, at
+``STANDOUT_FORCE_N`` (2 N) or more, the force at which its colour turns orange-red, and only for the
+``LABELLED_MAX`` most loaded such regions of that frame. Labelling every loaded region (a dozen
+over a handshake) piled the names of neighbouring phalanges on top of each other; this way the
+names that show are those of the few regions the colours point at, and they move as the load
+moves. The two hands' names (``world/hands``) always show.
 
 The default blueprint opens where the hands touch: the time panel selects the contact phase
 (the frames whose total force is at least 5 % of its peak) and plays it in a loop, the 3D view
 looks at the two palms at the peak from ``softhand render``'s default angle
 (`softhand.envs.picture.CameraView`), and the force plot lists only the regions that carry
-load (over ``LOADED_N``); the regions that never do are named in ``skin/designs``.
+load (over ``LOADED_N``); the regions that never do are named in ``skin/designs``. The plots'
+legends are hidden: a dozen series gave a legend as tall as the plot and a third of its width,
+over the lines. A line's region shows when the pointer rests on it, and the series keep their
+names and colours (the legend can be switched back on in the view's settings). The blueprint
+cannot place the time cursor; ``mid_shake_s`` gives the time a picture of the shake should be
+taken at (``tools/rerun_screenshot.mjs`` opens the viewer there).
 """
 
 from __future__ import annotations
@@ -60,10 +73,12 @@ from softhand.io import check_writable_file
 __all__ = [
     "ARROW_M_PER_N",
     "HAND_PREFIXES",
+    "LABELLED_MAX",
     "LOADED_N",
     "STANDOUT_FORCE_N",
     "HandshakeFrames",
     "force_colors",
+    "mid_shake_s",
     "read_recording_summary",
     "record_handshake",
 ]
@@ -78,6 +93,9 @@ _POINT_RADIUS_M = (0.003, 0.004)
 _TIMELINE = "sim_time"
 #: A region whose force never exceeds this (N) is left out of the force plot and unlabelled.
 LOADED_N = 0.05
+#: At most this many regions are labelled in the 3D view at once: the most loaded of those at
+#: STANDOUT_FORCE_N or more at that frame.
+LABELLED_MAX = 3
 #: 20 distinct series colours (matplotlib's tab20, dark and light alternating), one per region.
 _SERIES_COLOURS = (
     (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
@@ -300,6 +318,21 @@ def _loaded(frames: HandshakeFrames) -> list[str]:
     return [r for k, r in enumerate(frames.region_names) if top[k] > LOADED_N]
 
 
+def _labelled(frames: HandshakeFrames, candidates: list[str]) -> np.ndarray:
+    """(T, R) booleans, columns in the order of region_names: whether the region's label shows
+    at each frame. Among ``candidates`` (the regions whose geom can carry a label), those at
+    STANDOUT_FORCE_N or more, the LABELLED_MAX most loaded of them (ties: the earlier region)."""
+    forces = frames.region_force_N
+    allowed = np.isin(np.asarray(frames.region_names), candidates)
+    over = (forces >= STANDOUT_FORCE_N) & allowed[None, :]
+    # rank by force among the eligible regions of each frame (stable: ties keep region order)
+    order = np.argsort(-np.where(over, forces, -np.inf), axis=1, kind="stable")
+    rank = np.empty_like(order)
+    np.put_along_axis(rank, order, np.arange(forces.shape[1])[None, :].repeat(len(forces), 0),
+                      axis=1)
+    return over & (rank < LABELLED_MAX)
+
+
 def _blueprint(model: mujoco.MjModel | None = None, frames: HandshakeFrames | None = None,
                sensors: bool = False) -> rrb.Blueprint:
     eye, panel, forces = None, None, "$origin/**"
@@ -312,12 +345,13 @@ def _blueprint(model: mujoco.MjModel | None = None, frames: HandshakeFrames | No
         loaded = _loaded(frames)
         forces = [f"$origin/{rr.escape_entity_path_part(r)}" for r in loaded] or "$origin/**"
     series = rrb.TimeSeriesView(origin="forces", contents=forces,
-                                name="region forces (N), regions that carry load",
-                                plot_legend=rrb.PlotLegend(visible=True))
+                                name="region forces (N); point at a line for its region",
+                                plot_legend=rrb.PlotLegend(visible=False))
     if sensors:
         series = rrb.Horizontal(series, rrb.TimeSeriesView(
             origin="sensors", contents=forces,
-            name="embedded sensor readings (N on the 4 x 4 mm patch)"))
+            name="embedded sensor readings (N on the 4 x 4 mm patch)",
+            plot_legend=rrb.PlotLegend(visible=False)))
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial3DView(origin="world", name="handshake (grey < 2 N, orange-red > 2 N)",
@@ -348,6 +382,10 @@ def _log_recording(
     forces = {r: frames.region_force_N[:, k] for k, r in enumerate(frames.region_names)}
     log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     loaded = set(_loaded(frames))
+    labelled = _labelled(frames, [r for r in frames.region_names
+                                  if model.geom_type[model.geom(info[r].geom).id]
+                                  != mujoco.mjtGeom.mjGEOM_MESH])
+    label_on = {r: labelled[:, k] for k, r in enumerate(frames.region_names)}
 
     bodies = [b for b in range(model.nbody) if model.body(b).name.startswith(HAND_PREFIXES)]
     partner = hand_colours(model, ("hum_tissue_",))
@@ -367,14 +405,15 @@ def _log_recording(
             fields[colour] = [np.round(255 * rgba).astype(np.uint8)]
             log(entity, archetype.from_fields(**fields), static=True)
             continue
-        if archetype is not rr.Mesh3D:
+        per_frame: dict[str, Any] = {}
+        if archetype is not rr.Mesh3D:  # the label static, whether it shows per frame
             fields["labels"] = ["/".join(carried)]
-            fields["show_labels"] = any(r in loaded for r in carried)
+            per_frame["show_labels"] = np.any([label_on[r] for r in carried], axis=0)
         log(entity, archetype.from_fields(**fields), static=True)
         # a skin of several zones (the palm's surface) shows its most loaded zone
-        colors = force_colors(np.max([forces[r] for r in carried], axis=0),
-                              max_force_N=max_force_N)
-        send(entity, time, archetype.columns(**{colour: colors}))
+        per_frame[colour] = force_colors(np.max([forces[r] for r in carried], axis=0),
+                                         max_force_N=max_force_N)
+        send(entity, time, archetype.columns(**per_frame))
 
     pos, quat = _body_poses(model, frames, bodies)
     for k, b in enumerate(bodies):
@@ -508,8 +547,10 @@ def read_recording_summary(path: str | Path) -> dict[str, Any]:
         ``{"application_id": str, "recording_id": str, "timelines": [names],
         "entities": {path: {"static": [components], "temporal": [components],
         "sim_time_points": number of distinct sim_time values}},
-        "texts": {path: text of its static TextDocument}}``; entity paths without the leading
-        ``/``, components as ``"Archetype:field"`` (e.g. ``"Scalars:scalars"``).
+        "texts": {path: text of its static TextDocument},
+        "phases": [(sim_time s, partner phase) at each change, in time order]}``; entity paths
+        without the leading ``/``, components as ``"Archetype:field"`` (e.g.
+        ``"Scalars:scalars"``); ``phases`` is empty when the recording has no partner phase.
 
     Raises:
         FileNotFoundError: if ``path`` does not exist.
@@ -527,6 +568,7 @@ def read_recording_summary(path: str | Path) -> dict[str, Any]:
     entities: dict[str, dict[str, Any]] = {}
     times: dict[str, set[int]] = {}
     texts: dict[str, str] = {}
+    phases: list[tuple[float, str]] = []
     timelines: set[str] = set()
     for chunk in chunks:
         entity = chunk.entity_path.lstrip("/")
@@ -544,9 +586,47 @@ def read_recording_summary(path: str | Path) -> dict[str, Any]:
         if chunk.is_static and "TextDocument:text" in components:
             value = batch.column("TextDocument:text").to_pylist()[-1]
             texts[entity] = value[0] if isinstance(value, list) else value
+        if entity == "partner/phase" and "TextLog:text" in components and _TIMELINE in names:
+            ns = batch.column(_TIMELINE).to_numpy(zero_copy_only=False).astype("int64")
+            text = batch.column("TextLog:text").to_pylist()
+            phases += [(int(t) / 1e9, p[0] if isinstance(p, list) else p) for t, p in zip(ns, text,
+                                                                                      strict=True)]
     for e, entry in entities.items():
         entry.update({k: sorted(entry[k]) for k in ("static", "temporal")})
         entry["sim_time_points"] = len(times.get(e, ()))
     ids = {"application_id": store.application_id, "recording_id": store.recording_id}
     entities = dict(sorted(entities.items()))
-    return {**ids, "timelines": sorted(timelines), "entities": entities, "texts": texts}
+    return {**ids, "timelines": sorted(timelines), "entities": entities, "texts": texts,
+            "phases": sorted(phases)}
+
+
+def mid_shake_s(path: str | Path) -> float:
+    """The middle of the shake in a saved recording (sim_time, s): halfway between the start of
+    the partner's ``shake`` phase and the start of the phase after it (the recording's last
+    time if none follows). A picture of the shake is taken here (`tools/rerun_screenshot.mjs`).
+
+    Raises:
+        FileNotFoundError: if ``path`` does not exist.
+        ValueError: if ``path`` is not a readable rerun recording, or it has no ``shake`` phase.
+    """
+    summary = read_recording_summary(path)
+    phases = summary["phases"]
+    starts = [k for k, (_, p) in enumerate(phases) if p == "shake"]
+    if not starts:
+        raise ValueError(f"{str(path)!r}: no shake phase in partner/phase "
+                         f"(phases: {[p for _, p in phases]})")
+    k = starts[0]
+    start = phases[k][0]
+    end = phases[k + 1][0] if k + 1 < len(phases) else _last_time_s(path)
+    return 0.5 * (start + end)
+
+
+def _last_time_s(path: str | Path) -> float:
+    """The last sim_time (s) of the forces in a saved recording."""
+    reader = RrdReader(Path(path))
+    last = 0
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        if chunk.entity_path.lstrip("/").startswith("forces/") and not chunk.is_static:
+            values = chunk.to_record_batch().column(_TIMELINE).to_numpy(zero_copy_only=False)
+            last = max(last, int(values.astype("int64").max()))
+    return last / 1e9
