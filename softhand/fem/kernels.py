@@ -56,7 +56,12 @@ def sym_eig3(A, w, V):
     """Eigenvalues ``w`` (3,) and orthonormal eigenvectors (columns of ``V``, 3 x 3) of the
     symmetric 3 x 3 matrix ``A`` by cyclic Jacobi rotations (high relative accuracy; converges
     in a few sweeps). ``A`` is not modified. Returns the number of sweeps made."""
-    a = np.empty((3, 3))
+    return _sym_eig3(A, w, V, np.empty((3, 3)))
+
+
+@njit(cache=True)
+def _sym_eig3(A, w, V, a):
+    """`sym_eig3` with the 3 x 3 work array ``a`` given (no allocation)."""
     for i in range(3):
         for j in range(3):
             a[i, j] = A[i, j]
@@ -113,36 +118,48 @@ def _fprime(x, mu, alpha):
 
 
 @njit(cache=True)
-def _gamma(la, lb, V, mu, alpha):
-    """(S_a - S_b)/(c_a - c_b) without cancellation (Hyperfoam._gamma)."""
+def _gamma(la, lb, fa, fb, ema, emb, epb, V, mu, alpha):
+    """(S_a - S_b)/(c_a - c_b) without cancellation (Hyperfoam._gamma), from the values at the
+    two log-stretches computed once per Gauss point: ``fa = f(la)``, ``fb = f(lb)``,
+    ``ema = exp(-2 la)``, ``emb = exp(-2 lb)``, ``epb = exp(2 lb)`` (the same numbers as
+    evaluating them here)."""
     h = la - lb
     if abs(h) < _DD_SWITCH:
         mid = 0.5 * (la + lb)
         dq = (_fprime(mid, mu, alpha) - 2.0 * _f(mid, mu, alpha)) * math.exp(-2.0 * mid)
     else:
-        dq = (_f(la, mu, alpha) * math.exp(-2.0 * la)
-              - _f(lb, mu, alpha) * math.exp(-2.0 * lb)) / h
-    dd_c = 2.0 * math.exp(2.0 * lb) * _phi1(2.0 * h)
-    dd_e = -2.0 * math.exp(-2.0 * lb) * _phi1(-2.0 * h)
+        dq = (fa * ema - fb * emb) / h
+    dd_c = 2.0 * epb * _phi1(2.0 * h)
+    dd_e = -2.0 * emb * _phi1(-2.0 * h)
     return (dq + V * dd_e) / dd_c
 
 
 @njit(cache=True)
-def _hyperfoam(C, mu, alpha, beta, S, D):
+def _hyperfoam(C, mu, alpha, beta, S, D, work):
     """Instantaneous S (Voigt) and D = 2 dS/dC (Voigt 6 x 6) at C (Hyperfoam.stress).
+    ``work``: a (10, 6) scratch array (no allocation per Gauss point).
     Returns False when C is not positive definite."""
-    c = np.empty(3)
-    N = np.empty((3, 3))
-    sym_eig3(C, c, N)
+    c = work[0, :3]
+    l = work[0, 3:]
+    tau = work[1, :3]
+    fa = work[1, 3:]  # f(l_a) of _gamma
+    em = work[2, :3]  # exp(-2 l_a)
+    ep = work[2, 3:]  # exp(2 l_a)
+    N = work[3:, :3]
+    dtau = work[3:, 3:]
+    _sym_eig3(C, c, N, D[:3, :3])  # D is written below: its corner serves as the work array
     for a in range(3):
         if not (c[a] > 0.0) or not math.isfinite(c[a]):
             return False
-    l = np.empty(3)
     for a in range(3):
         l[a] = 0.5 * math.log(c[a])
+        tau[a] = 0.0
+        fa[a] = 0.0
+        em[a] = math.exp(-2.0 * l[a])
+        ep[a] = math.exp(2.0 * l[a])
+        for b in range(3):
+            dtau[a, b] = 0.0
     L = l[0] + l[1] + l[2]
-    tau = np.zeros(3)
-    dtau = np.zeros((3, 3))
     Vv = 0.0
     for i in range(mu.size):
         m, al = mu[i], alpha[i]
@@ -150,10 +167,12 @@ def _hyperfoam(C, mu, alpha, beta, S, D):
         ev = beta * math.exp(-al * beta * L)
         Vv += 2.0 * m * vol
         for a in range(3):
-            tau[a] += 2.0 * m * (l[a] * _phi1(al * l[a]) + vol)
+            phi = _phi1(al * l[a])
+            tau[a] += 2.0 * m * (l[a] * phi + vol)
+            fa[a] += 2.0 * m * l[a] * phi  # the sum of _f, term by term
             for b in range(3):
                 dtau[a, b] += 2.0 * m * ((math.exp(al * l[a]) if a == b else 0.0) + ev)
-    mv = np.empty((3, 6))  # Voigt of n_a n_a^T
+    mv = work[6:9]  # Voigt of n_a n_a^T
     for a in range(3):
         for v in range(6):
             mv[a, v] = N[_VOIGT_A[v], a] * N[_VOIGT_B[v], a]
@@ -173,10 +192,10 @@ def _hyperfoam(C, mu, alpha, beta, S, D):
             for v in range(6):
                 for u in range(6):
                     D[v, u] += dS * mv[a, v] * mv[b, u]
-    p = np.empty(6)
+    p = work[9]
     for k in range(3):
         a, b = _PAIR_A[k], _PAIR_B[k]
-        g4 = 4.0 * _gamma(l[a], l[b], Vv, mu, alpha)
+        g4 = 4.0 * _gamma(l[a], l[b], fa[a], fa[b], em[a], em[b], ep[b], Vv, mu, alpha)
         for v in range(6):
             i, j = _VOIGT_A[v], _VOIGT_B[v]
             p[v] = 0.5 * (N[i, a] * N[j, b] + N[j, a] * N[i, b])
@@ -229,6 +248,7 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
         D0 = np.empty((6, 6))
         St = np.zeros((3, 3))
         P = np.empty((3, 3))
+        work = np.empty((10, 6))
         for r in range(nn * dim):
             fe[e, r] = 0.0
         for q in range(nq):
@@ -245,7 +265,7 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
                     for m in range(3):
                         s += F[m, i] * F[m, j]
                     C[i, j] = s
-            if not _hyperfoam(C, mu, alpha, beta, S0, D0):
+            if not _hyperfoam(C, mu, alpha, beta, S0, D0, work):
                 bad[k] += 1
                 continue
             row = k * nq + q
