@@ -319,31 +319,47 @@ def _tangent_factor(e, F, S, D, dNdX, wdet, E):
     M = np.empty((3, 3, 3, 3))  # M[i, b, j, d]
     for q in range(nq):
         w = wdet[e, q]
+        # sums written out below as in the E loop (same additions, same order)
         for i in range(dim):
+            f0, f1, f2 = F[e, q, i, 0], F[e, q, i, 1], F[e, q, i, 2]
             for b in range(dim):
                 for c in range(dim):
                     for d in range(dim):
-                        s = 0.0
-                        for a in range(dim):
-                            s += F[e, q, i, a] * D[e, q, _VOIGT_OF[a, b], _VOIGT_OF[c, d]]
+                        cd = _VOIGT_OF[c, d]
+                        s = (f0 * D[e, q, _VOIGT_OF[0, b], cd]
+                             + f1 * D[e, q, _VOIGT_OF[1, b], cd])
+                        if dim == 3:
+                            s += f2 * D[e, q, _VOIGT_OF[2, b], cd]
                         T[i, b, c, d] = s
-        for i in range(dim):
-            for b in range(dim):
-                for j in range(dim):
+        for j in range(dim):
+            f0, f1, f2 = F[e, q, j, 0], F[e, q, j, 1], F[e, q, j, 2]
+            for i in range(dim):
+                for b in range(dim):
                     for d in range(dim):
                         s = S[e, q, _VOIGT_OF[b, d]] if i == j else 0.0
-                        for c in range(dim):
-                            s += T[i, b, c, d] * F[e, q, j, c]
+                        s = s + T[i, b, 0, d] * f0 + T[i, b, 1, d] * f1
+                        if dim == 3:
+                            s += T[i, b, 2, d] * f2
                         M[i, b, j, d] = w * s
+        # the sum over b written out (the same additions in the same order as a loop from
+        # s = 0) keep the factors in registers: with the other two, the factor of a 3D tangent of
+        # pocket2-sil took 2.1 ms instead of 10.8 (the product after it, BLAS, 4.3 ms)
         for n in range(nn):
-            for i in range(dim):
-                for j in range(dim):
-                    row = (n * dim + i) * dim + j
-                    for d in range(dim):
-                        s = 0.0
-                        for b in range(dim):
-                            s += dNdX[e, q, n, b] * M[i, b, j, d]
-                        E[row, q * dim + d] = s
+            g0, g1 = dNdX[e, q, n, 0], dNdX[e, q, n, 1]
+            if dim == 3:
+                g2 = dNdX[e, q, n, 2]
+                for i in range(3):
+                    for j in range(3):
+                        row = (n * 3 + i) * 3 + j
+                        for d in range(3):
+                            E[row, q * 3 + d] = (g0 * M[i, 0, j, d] + g1 * M[i, 1, j, d]
+                                                 + g2 * M[i, 2, j, d])
+            else:
+                for i in range(2):
+                    for j in range(2):
+                        row = (n * 2 + i) * 2 + j
+                        for d in range(2):
+                            E[row, q * 2 + d] = g0 * M[i, 0, j, d] + g1 * M[i, 1, j, d]
 
 
 @njit(parallel=True, cache=True)
