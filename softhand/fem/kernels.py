@@ -214,10 +214,19 @@ def _deformation_gradient(u, elements, dim, dNdX, e, q, F):
             F[i, j] = 1.0 if i == j else 0.0
     for n in range(nn):
         node = elements[e, n]
-        for i in range(dim):
-            ui = u[node * dim + i]
-            for j in range(dim):
-                F[i, j] += ui * dNdX[e, q, n, j]
+        g0, g1 = dNdX[e, q, n, 0], dNdX[e, q, n, 1]
+        if dim == 3:
+            g2 = dNdX[e, q, n, 2]
+            for i in range(3):
+                ui = u[node * 3 + i]
+                F[i, 0] += ui * g0
+                F[i, 1] += ui * g1
+                F[i, 2] += ui * g2
+        else:
+            for i in range(2):
+                ui = u[node * 2 + i]
+                F[i, 0] += ui * g0
+                F[i, 1] += ui * g1
     return (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
             - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
             + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
@@ -296,12 +305,15 @@ def evaluate_group(u, elements, dim, idx, dNdX, wdet, mu, alpha, beta, g, decay,
                     for m in range(dim):
                         s += F[i, m] * St[m, b]
                     P[i, b] = s
-            for n in range(nn):
-                for i in range(dim):
-                    s = 0.0
-                    for b in range(dim):
-                        s += dNdX[e, q, n, b] * P[i, b]
-                    fe[e, n * dim + i] += s
+            for n in range(nn):  # the sum over b written out (same order), as in the tangent
+                g0, g1 = dNdX[e, q, n, 0], dNdX[e, q, n, 1]
+                if dim == 3:
+                    g2 = dNdX[e, q, n, 2]
+                    for i in range(3):
+                        fe[e, n * 3 + i] += g0 * P[i, 0] + g1 * P[i, 1] + g2 * P[i, 2]
+                else:
+                    for i in range(2):
+                        fe[e, n * 2 + i] += g0 * P[i, 0] + g1 * P[i, 1]
     return int(bad.sum())
 
 
