@@ -2,6 +2,11 @@
 
 Measures, in one process on this machine:
 
+* the design search's two FE runs (`softhand.design.evaluate.screen_settings`): the 2D screen
+  and the 3D check of pocket2-sil to 2 N on CHOLMOD (the default install), as the search runs
+  them (one thread, 4 contact points per face direction) against the opt-in faster settings
+  (2 threads; 2 contact points), interleaved, each run in a fresh process, with the answers'
+  differences (indentation at 1 N and 2 N, force at 1 mm and 2 mm);
 * the element engines side by side (``IndentationSettings.engine``): the NumPy reference
   (batched NumPy elements, SuperLU ordering and factorizing every tangent) against the compiled
   engine (numba kernels, the run's fixed pattern) on each sparse Cholesky installed here
@@ -94,6 +99,7 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False,
     machine = machine_info()
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
     data["engines"] = _engines(repeats=2 if quick else 3, say=say)
+    data["screen"] = _screen(repeats=3, say=say)
     data["solver"] = resolve_solver("auto")  # the default runs below go to it
     say("one 3D design (pocket2-sil) to 2 N, ramp")
     one = indent("pocket2-sil", ramp)
@@ -212,6 +218,92 @@ def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
     return out
 
 
+#: The design search's runs against the opt-in faster settings: (key, keywords of
+#: `screen_settings`, label).
+_SCREEN_RUNS = (("search", {}, "as the search runs it (1 thread, 4 contact points)"),
+                ("threads2", {"threads": 2}, "2 threads"),
+                ("points2", {"contact_points": 2}, "2 contact points"),
+                ("points2_threads2", {"contact_points": 2, "threads": 2},
+                 "2 contact points, 2 threads"))
+_SCREEN_MARKS = (("d1N_mm", "displacement_at_1N_mm"), ("d2N_mm", "displacement_at_2N_mm"),
+                 ("F1mm_N", "force_at_1mm_N"), ("F2mm_N", "force_at_2mm_N"))
+
+
+def _screen(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
+    """The 2D screen and the 3D check of pocket2-sil (`screen_settings`, CHOLMOD) as the search
+    runs them and with each of `_SCREEN_RUNS`' faster settings, interleaved ``repeats`` times
+    (the 3D check: 2), each in a fresh process; median walls and the answers' differences."""
+    out: dict[str, Any] = {"design": "pocket2-sil", "solver": "cholmod",
+                           "labels": {key: label for key, _, label in _SCREEN_RUNS}}
+    for mode, name in (("2d", "2D screen"), ("3d", "3D check")):
+        runs = repeats if mode == "2d" else min(repeats, 2)
+        walls: dict[str, list[float]] = {key: [] for key, *_ in _SCREEN_RUNS}
+        last: dict[str, dict[str, Any]] = {}
+        for i in range(runs):
+            for key, given, label in _SCREEN_RUNS:
+                say(f"{name} of pocket2-sil, {i + 1} of {runs}: {label}")
+                r = _fresh_screen_run(mode, given)
+                walls[key].append(r["wall_s"])
+                last[key] = r
+        ref = last["search"]
+        rows = {}
+        for key, w in walls.items():
+            r = last[key]
+            diff = {}
+            for mark, field in _SCREEN_MARKS:
+                a, b = ref[field], r[field]
+                diff[mark] = None if a is None or b is None else 100.0 * (b - a) / a
+            rows[key] = {"wall_s": statistics.median(w), "walls_s": w,
+                         "speedup": statistics.median(walls["search"]) / statistics.median(w),
+                         "newton_iterations": r["newton_iterations"], "steps": r["n_steps"],
+                         **{mark: r[field] for mark, field in _SCREEN_MARKS},
+                         "difference_pct": diff}
+        out[mode] = rows
+    return out
+
+
+def _fresh_screen_run(mode: str, given: dict[str, Any]) -> dict[str, Any]:
+    """One `screen_settings` run of pocket2-sil on CHOLMOD in a new Python process (its
+    summary), after a small run that loads the compiled kernels."""
+    kw = ", ".join(f"{k}={v!r}" for k, v in given.items())
+    code = ("import dataclasses, json, sys\n"
+            "from softhand.design.evaluate import screen_settings\n"
+            "from softhand.fem.solver import indent\n"
+            f"s = dataclasses.replace(screen_settings(mode={mode!r}, {kw}), solver='cholmod')\n"
+            "indent('solid-sil', dataclasses.replace(s, mesh='coarse'))\n"
+            "r = indent('pocket2-sil', s)\n"
+            "json.dump({**r.summary(), 'force_at_1mm_N': r.force_at(1.0)}, sys.stdout)\n")
+    done = subprocess.run([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"the {mode} screen run {given} failed: {done.stderr.strip()[-500:]}")
+    return json.loads(done.stdout)
+
+
+def _screen_lines(d: dict[str, Any]) -> list[str]:
+    e = d.get("screen")
+    if not e:
+        return []
+    lines = [f"The design search's runs of {e['design']} to 2 N on {e['solver'].upper()} (the "
+             "default install; `softhand.design.evaluate.screen_settings`), as the search runs "
+             "them and with the opt-in faster settings, interleaved, each in a fresh process, "
+             "median wall; the answers' differences from the search's run:", "",
+             "| run | settings | wall (s) | speed-up | Newton iterations | d(1 N) | d(2 N) "
+             "| F(1 mm) | F(2 mm) |", "|---|---|---|---|---|---|---|---|---|"]
+
+    def pct(v):
+        return "" if v is None else f"{v:+.2f} %"
+
+    for mode, name in (("2d", "2D screen"), ("3d", "3D check")):
+        for key, r in e[mode].items():
+            dp = r["difference_pct"]
+            lines.append(f"| {name} | {e['labels'][key]} | {r['wall_s']:.3f} | "
+                         f"{r['speedup']:.2f}x | {r['newton_iterations']} | "
+                         + " | ".join("reference" if key == "search" else pct(dp[m])
+                                      for m, _ in _SCREEN_MARKS) + " |")
+    return lines
+
+
 def _fresh_run(hold: float, engine: str, solver: str) -> dict[str, Any]:
     """One pocket2-sil run in a new Python process (its summary, `IndentationResult.summary`),
     so that no engine runs on libraries another one loaded: once MKL has run, its BLAS is
@@ -260,6 +352,7 @@ def _markdown(d: dict[str, Any]) -> str:
         "# FE benchmark (`softhand bench fe`)", "",
         machine_line({"git_revision": d["git_revision"], **d["machine"]}), "",
         *_engine_lines(d), "",
+        *_screen_lines(d), "",
         f"| what (compiled engine, {d.get('solver', 'cholmod')}) | wall (s) |", "|---|---|",
         f"| one 3D design (pocket2-sil) to 2 N, default mesh | {d['one_design']['ramp_wall_s']:.1f} |",
         f"| same with the 10 s hold | {d['one_design']['ramp_hold_wall_s']:.1f} |",

@@ -27,6 +27,7 @@ and the contact force `\sum_q \varepsilon w_q\langle -g_q\rangle`. Integrating a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -75,8 +76,14 @@ class GapSet:
         g = self.gaps(u, shift)
         closed = g < 0.0
         lam = penalty * self.weight * np.where(closed, -g, 0.0)
-        r = -(self.G.T @ lam)
+        r = -(self.transposed @ lam)
         return r, penalty * self.weight * closed, int(closed.sum())
+
+    @cached_property
+    def transposed(self) -> sp.csr_matrix:
+        """The gap matrix ``G`` transposed, in CSR (dofs x points), formed once: `penalty_forces` runs at every
+        Newton iteration, and transposing there took 0.06 s of a 0.87 s 2D run."""
+        return self.G.T.tocsr()
 
     def stiffness(self, kw: np.ndarray) -> sp.csr_matrix:
         """The tangent ``G^T diag(kw) G`` for the point stiffnesses of `penalty_forces`."""

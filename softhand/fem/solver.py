@@ -385,28 +385,45 @@ class _Model:
                 "pressure_MPa": gaps.pressure(u, self.penalty, shift),
                 "force_N": F, "displacement_mm": d}
 
+    def residual(self, u: np.ndarray, state: ElementState, dt: float, d: float):
+        """The free residual at u (elements and contact), its largest entry, the elements'
+        tangent function and new history, the contact sets' stiffness data and closed counts.
+
+        Raises:
+            ElementError: an element is inverted at u.
+        """
+        f, tangent_of, new_state = self.asm.evaluate(u, state, dt)
+        gaps, shift = self.contact(u, d)
+        rp, kw_p, n_plate = gaps.penalty_forces(u, self.penalty, shift)
+        f += rp
+        n_pocket, kw_c = 0, None
+        if self.pocket is not None:
+            rc, kw_c, n_pocket = self.pocket.penalty_forces(u, self.penalty)
+            f += rc
+        r = f[self.free]
+        return r, float(np.abs(r).max()), tangent_of, new_state, (gaps, kw_p, kw_c), \
+            (n_plate, n_pocket)
+
     def newton(self, u0: np.ndarray, state: ElementState, dt: float, d: float, tol_N: float):
-        """Solve one step; return (u, new_state, iterations, residual history, contact counts)."""
+        """Solve one step; return (u, new_state, iterations, residual history, contact counts).
+
+        An update that inverts an element is halved, up to 5 times; the evaluation that finds
+        a trial state admissible is that of the next iteration (no separate inversion check).
+        """
         u = u0.copy()
         history: list[float] = []
+        current = self.residual(u, state, dt, d)
         for it in range(1, self.settings.max_newton + 1):
-            f, tangent_of, new_state = self.asm.evaluate(u, state, dt)
-            gaps, shift = self.contact(u, d)
-            rp, kw_p, n_plate = gaps.penalty_forces(u, self.penalty, shift)
-            f += rp
-            n_pocket, kw_c = 0, None
-            if self.pocket is not None:
-                rc, kw_c, n_pocket = self.pocket.penalty_forces(u, self.penalty)
-                f += rc
-            r = f[self.free]
-            res = float(np.abs(r).max())
+            r, res, tangent_of, new_state, (gaps, kw_p, kw_c), closed = current
             history.append(res)
             if not np.isfinite(res):
                 raise ElementError("residual is not finite")
             # the residual includes the contact forces at u itself, so a small residual is an
             # equilibrium of the penalty problem whatever the closed set did on the way here
             if res <= tol_N:
-                return u, new_state, it, history, (n_plate, n_pocket)
+                return u, new_state, it, history, closed
+            if it == self.settings.max_newton:
+                break
             if self.settings.engine == "compiled":
                 contacts = [(kw_p, gaps.G.data)]
                 if kw_c is not None:
@@ -421,12 +438,16 @@ class _Model:
             if not np.all(np.isfinite(du)):
                 raise ElementError("linear solve returned non-finite values")
             step = 1.0
-            for _ in range(6):  # backtrack only if the update inverts an element
+            for halvings in range(6):  # backtrack only if the update inverts an element
                 trial = u.copy()
                 trial[self.free] += step * du
-                if self.asm.inverted(trial) == 0:
+                try:
+                    current = self.residual(trial, state, dt, d)
                     break
-                step *= 0.5
+                except ElementError:
+                    if halvings == 5:
+                        raise
+                    step *= 0.5
             u = trial
         raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
