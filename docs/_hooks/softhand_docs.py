@@ -230,8 +230,19 @@ def _cli() -> str:
         ctx = click.Context(command, info_name=path[-1], parent=parent, max_content_width=100,
                             terminal_width=100)
         if path[1:]:
-            # default folders print as this checkout's absolute paths: show them repository-relative
-            text = command.get_help(ctx).replace(f"{ROOT}{os.sep}", "")
+            # default folders print as this checkout's absolute paths: show them
+            # repository-relative, before click wraps the help (so that the page does not
+            # depend on where the checkout lies)
+            here = f"{ROOT}{os.sep}"
+            saved = [(p, p.default) for p in command.params
+                     if isinstance(p.default, str) and here in p.default]
+            try:
+                for p, default in saved:
+                    p.default = default.replace(here, "")
+                text = command.get_help(ctx).replace(here, "")
+            finally:
+                for p, default in saved:
+                    p.default = default
             parts.append(f"{'#' * min(4, len(path))} `{' '.join(path)}`\n\n```text\n{text}\n```\n")
         if isinstance(command, click.Group):
             for name in command.list_commands(ctx):
