@@ -266,7 +266,13 @@ PAD = ("representations", "soft-contact+relaxation", "params")
                                   "expected a list of 5 numbers (got 2)"),
     ((*SC, "stiffness_N_per_m_per_invmass"), "897",
      "representations.soft-contact.params.stiffness_N_per_m_per_invmass = '897': expected a "
-     "finite number > 0"),
+     "finite number in (0, 1e+08]"),
+    ((*SC, "stiffness_N_per_m_per_invmass"), 1e300,
+     "representations.soft-contact.params.stiffness_N_per_m_per_invmass = 1e+300: expected a "
+     "finite number in (0, 1e+08] (beyond it no timestep integrates it stably)"),
+    ((*SC, "damping_Ns_per_m_per_invmass"), 2e4,
+     "representations.soft-contact.params.damping_Ns_per_m_per_invmass = 20000.0: expected a "
+     "finite number in [0, 10000]"),
     ((*SC, "damping_Ns_per_m_per_invmass"), KeyError,
      "representations.soft-contact.params.damping_Ns_per_m_per_invmass: missing (required: "),
     ((*PAD, "damping_scale"), [1.0],

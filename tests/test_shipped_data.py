@@ -16,6 +16,7 @@ import hashlib
 import json
 import re
 import shutil
+import sys
 from collections import namedtuple
 from dataclasses import replace
 from pathlib import Path
@@ -240,6 +241,29 @@ def test_an_unknown_gl_backend_is_refused_before_the_run(monkeypatch, tmp_path):
     monkeypatch.setenv("MUJOCO_GL", "bogus")
     res = invoke(["render", str(tmp_path / "x.png")])
     assert res.exit_code == 2 and "MUJOCO_GL = 'bogus'" in res.output and "osmesa" in res.output
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the library check is Linux's")
+def test_a_gl_backend_this_machine_cannot_open_is_refused_before_the_run(monkeypatch, tmp_path):
+    """MUJOCO_GL=osmesa without libOSMesa, and glfw without a display, ended after the whole
+    simulation in an internal error from deep inside the first render; now one line before it."""
+    import ctypes.util
+
+    find = ctypes.util.find_library
+    monkeypatch.setattr(ctypes.util, "find_library",
+                        lambda name: None if name == "OSMesa" else find(name))
+    monkeypatch.setenv("MUJOCO_GL", "osmesa")
+    res = invoke(["render", str(tmp_path / "x.png")])
+    lines = res.output.strip().splitlines()
+    assert res.exit_code == 2 and len(lines) == 1, res.output
+    assert lines[0].startswith("error: MUJOCO_GL = 'osmesa': libOSMesa is not installed")
+    monkeypatch.setenv("MUJOCO_GL", "glfw")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    res = invoke(["render", str(tmp_path / "x.png")])
+    assert res.exit_code == 2 and "MUJOCO_GL = 'glfw'" in res.output, res.output
+    assert "no display" in res.output
+    assert not (tmp_path / "x.png").exists()
 
 
 @pytest.mark.parametrize("edit, needle", [

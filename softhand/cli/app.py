@@ -185,11 +185,28 @@ def _folder_bytes(path: str | Path) -> int:
 
 
 def _check_gl() -> None:
-    """MUJOCO_GL names a backend MuJoCo has (a wrong one fails deep inside the first render)."""
+    """MUJOCO_GL names a backend MuJoCo has, and this machine can open it (a wrong or missing one
+    fails deep inside the first render, after the simulation): the backend's library is
+    installed (libEGL, libOSMesa), and glfw has a display to open a window on."""
+    import ctypes.util
+    import sys
+
     value = os.environ.setdefault("MUJOCO_GL", "egl")  # before mujoco is imported
     if value not in ("egl", "osmesa", "glfw"):
         bad(f"MUJOCO_GL = {value!r}: allowed egl (GPU, headless), osmesa (CPU, headless) or "
             "glfw (a window system)")
+    if not sys.platform.startswith("linux"):
+        return
+    library = {"egl": "EGL", "osmesa": "OSMesa"}.get(value)
+    if library is not None and ctypes.util.find_library(library) is None:
+        other = [b for b, lib in (("egl", "EGL"), ("osmesa", "OSMesa"))
+                 if b != value and ctypes.util.find_library(lib)]
+        bad(f"MUJOCO_GL = {value!r}: lib{library} is not installed on this machine; "
+            + (f"MUJOCO_GL={other[0]} works here" if other else
+               "install libEGL (GPU) or libOSMesa (CPU) for offscreen pictures"))
+    if value == "glfw" and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        bad("MUJOCO_GL = 'glfw': glfw opens a window and there is no display here (DISPLAY is "
+            "unset); MUJOCO_GL=egl or osmesa render offscreen")
 
 
 def run() -> None:

@@ -32,6 +32,10 @@ __all__ = ["D_MAX", "SoftContactParams", "fit_soft_contact", "impedance"]
 
 D_MAX = 0.3  # largest impedance allowed: beyond it the contact acts as a motion constraint
 D_MIN = 1e-4  # MuJoCo's mjMINIMP
+#: Largest soft-contact stiffness and damping per unit inverse mass a skin file may hold
+#: (SoftContactParams.from_dict says why)
+STIFFNESS_MAX = 1e8
+DAMPING_MAX = 1e4
 MAX_POWER = 20.0  # steepest impedance sigmoid the fit may use
 
 
@@ -108,17 +112,22 @@ class SoftContactParams:
     def from_dict(cls, d: Any, *, key: str = "params") -> SoftContactParams:
         """Parse `to_dict` output, checking every value.
 
-        Allowed: ``stiffness_N_per_m_per_invmass`` > 0, ``damping_Ns_per_m_per_invmass`` >= 0,
-        ``solimp`` 5 numbers: d0 and dw in [1e-4, 0.3] with d0 <= dw, width > 0 (m), midpoint in
-        (0, 1), power >= 1.
+        Allowed: ``stiffness_N_per_m_per_invmass`` in (0, 1e8], ``damping_Ns_per_m_per_invmass``
+        in [0, 1e4] (per unit inverse mass: a stiffness k is a squared angular frequency and a
+        damping b a rate, and MuJoCo's step at the smallest timestep softhand allows, 0.1 ms,
+        stays stable for sqrt(k) dt < 2 and b dt < 2, i.e. k < 4e8 and b < 2e4; the shipped
+        calibrations lie within 193-2.4e5 and 0.5-6.2), ``solimp`` 5 numbers: d0 and dw in
+        [1e-4, 0.3] with d0 <= dw, width > 0 (m), midpoint in (0, 1), power >= 1.
 
         Raises:
             ValueError: ``"{key}.solimp[0] = 'x': expected a finite number in [0.0001, 0.3]"``.
         """
         names = ("stiffness_N_per_m_per_invmass", "damping_Ns_per_m_per_invmass", "solimp")
         check_mapping(key, d, required=names)
-        stiffness = check_number(join(key, names[0]), d[names[0]], lo=0.0, lo_open=True)
-        damping = check_number(join(key, names[1]), d[names[1]], lo=0.0)
+        stiffness = check_number(join(key, names[0]), d[names[0]], lo=0.0, hi=STIFFNESS_MAX,
+                                 lo_open=True, why="(beyond it no timestep integrates it stably)")
+        damping = check_number(join(key, names[1]), d[names[1]], lo=0.0, hi=DAMPING_MAX,
+                               why="(beyond it no timestep integrates it stably)")
         si = join(key, "solimp")
         if not isinstance(d["solimp"], (list, tuple)) or len(d["solimp"]) != 5:
             check_numbers(si, d["solimp"], length=5)  # raises: not a list of 5
