@@ -273,10 +273,15 @@ def _fresh_screen_run(mode: str, given: dict[str, Any]) -> dict[str, Any]:
             "indent('solid-sil', dataclasses.replace(s, mesh='coarse'))\n"
             "r = indent('pocket2-sil', s)\n"
             "json.dump({**r.summary(), 'force_at_1mm_N': r.force_at(1.0)}, sys.stdout)\n")
+    return _python_json(code, f"the {mode} screen run {given}")
+
+
+def _python_json(code: str, what: str) -> dict[str, Any]:
+    """Run ``code`` in a new Python process and read the JSON it writes to stdout."""
     done = subprocess.run([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
                           capture_output=True, text=True, check=False)
     if done.returncode != 0:
-        raise RuntimeError(f"the {mode} screen run {given} failed: {done.stderr.strip()[-500:]}")
+        raise RuntimeError(f"{what} failed: {done.stderr.strip()[-500:]}")
     return json.loads(done.stdout)
 
 
@@ -316,11 +321,7 @@ def _fresh_run(hold: float, engine: str, solver: str) -> dict[str, Any]:
             f"indent('solid-sil', IndentationSettings(mesh='coarse', hold_s=0.0, {given}))\n"
             f"r = indent('pocket2-sil', IndentationSettings(hold_s={hold!r}, {given}))\n"
             "json.dump(r.summary(), sys.stdout)\n")
-    done = subprocess.run([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
-                          capture_output=True, text=True, check=False)
-    if done.returncode != 0:
-        raise RuntimeError(f"the {engine}/{solver} run failed: {done.stderr.strip()[-500:]}")
-    return json.loads(done.stdout)
+    return _python_json(code, f"the {engine}/{solver} run")
 
 
 def _engine_lines(d: dict[str, Any]) -> list[str]:
