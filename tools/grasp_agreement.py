@@ -43,20 +43,14 @@ def _far(d: tuple[float, float, float]) -> bool:
 
 def agreement(length_mm: float, width_mm: float, tie: float = 0.005) -> dict:
     from softhand.hands import HandConfig, PartnerConfig, SceneConfig
-    from softhand.hands.grasp import GOOD_COST_M2, GRASP_SETTINGS, _Problem, _solve
+    from softhand.hands.grasp import GOOD_COST_M2, GRASP_SETTINGS, _Problem, _start_runs
 
     config = SceneConfig(partner=PartnerConfig(hand=HandConfig(hand_length_m=length_mm / 1e3,
                                                                hand_width_m=width_mm / 1e3)))
     problem = _Problem(config, GRASP_SETTINGS)
-    runs: dict[bool, list] = {}
-    for fd in (False, True):
-        runs[fd] = []
-        for start in problem.starts():
-            x = start
-            for contacts in (False, True):
-                x, _ = _solve(problem, x, contacts, GRASP_SETTINGS.max_iter,
-                              finite_differences=fd)
-            runs[fd].append((0.5 * float(np.sum(problem.residual(x, contacts=True) ** 2)), x))
+    runs = {fd: [(cost, x) for cost, x, _ in _start_runs(problem, GRASP_SETTINGS,
+                                                          finite_differences=fd)]
+            for fd in (False, True)}
     shipped = min(runs[False], key=lambda r: r[0])
     fd_best = min(runs[True], key=lambda r: r[0])
     both = runs[False] + runs[True]

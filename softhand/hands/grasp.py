@@ -685,15 +685,10 @@ def solve_grasp(config: SceneConfig | None = None,
                  metrics=metrics, touching_phalanges=touching, settings=settings)
 
 
-def _solve_starts(problem: _Problem, settings: GraspSettings, *,
-                  finite_differences: bool = False) -> tuple[float, np.ndarray, list[int]]:
-    """The grasp: the cheapest of all starts (`_Problem.starts`), each solved to the end, both
-    stages: (cost, variables, iterations per stage of that start).
-
-    The cheapest, not the first that meets GOOD_COST_M2: the targets leave local minima a few
-    per cent apart in cost (a finger on one side of a neighbour or the other) whose postures
-    differ by up to 38 deg, and a grasp that depends on the order of the starts is not one
-    answer (tools/grasp_agreement.py measures how far the starts and the two Jacobians agree)."""
+def _start_runs(problem: _Problem, settings: GraspSettings, *,
+                finite_differences: bool = False) -> list[tuple[float, np.ndarray, list[int]]]:
+    """Every start (`_Problem.starts`) solved to the end, both stages: per start (cost,
+    variables, iterations per stage), in the order of the starts."""
     runs = []
     for start in problem.starts():
         x, iterations = start, []
@@ -703,6 +698,19 @@ def _solve_starts(problem: _Problem, settings: GraspSettings, *,
             iterations.append(len(trace))
         runs.append((0.5 * float(np.sum(problem.residual(x, contacts=True) ** 2)), x,
                      iterations))
+    return runs
+
+
+def _solve_starts(problem: _Problem, settings: GraspSettings, *,
+                  finite_differences: bool = False) -> tuple[float, np.ndarray, list[int]]:
+    """The grasp: the cheapest of all starts (`_start_runs`): (cost, variables, iterations per
+    stage of that start).
+
+    The cheapest, not the first that meets GOOD_COST_M2: the targets leave local minima a few
+    per cent apart in cost (a finger on one side of a neighbour or the other) whose postures
+    differ by up to 38 deg, and a grasp that depends on the order of the starts is not one
+    answer (tools/grasp_agreement.py measures how far the starts and the two Jacobians agree)."""
+    runs = _start_runs(problem, settings, finite_differences=finite_differences)
     # starts that reach the same minimum tie to rounding (1e-13 of the cost): the first of them
     lowest = min(r[0] for r in runs)
     return next(r for r in runs if r[0] <= lowest * (1.0 + _TIE))
