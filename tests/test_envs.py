@@ -142,6 +142,39 @@ def test_default_timestep_reproduces_half_a_millisecond(controller):
     assert sum(v["mean_N"] for v in coarse.values()) == pytest.approx(total, rel=0.08)
 
 
+@pytest.mark.parametrize("controller", ["neutral", "open-loop", "force"])
+@pytest.mark.slow
+def test_one_and_two_milliseconds_agree_within_5_percent_on_every_region_over_1_n(controller):
+    """Issue 35, item 7: 2 ms against 1 ms, same partner and controller, every region whose peak
+    passes 1 N: its peak and its mean within 5 % (measured, seeds 0-3: worst peak 4.3 %, Palm1's
+    grip transient; worst mean 3.9 %). Before the clock's slack (partner.CLOCK_SLACK_S) the
+    open-loop close took one action more at 1 ms and its middle phalanges were 8-10 % apart."""
+    fine = run_handshake(controller=controller, seed=0, timestep_s=0.001).table()
+    coarse = run_handshake(controller=controller, seed=0, timestep_s=0.002).table()
+    loaded = [r for r, v in fine.items() if v["peak_N"] > 1.0]
+    assert loaded
+    for r in loaded:
+        for what in ("peak_N", "mean_N"):
+            assert coarse[r][what] == pytest.approx(fine[r][what], rel=0.05), (r, what)
+
+
+def test_open_loop_closes_for_the_same_number_of_actions_at_every_timestep():
+    """The open-loop close lasts close_s of the simulation clock, a sum of timesteps that lands
+    on it from either side: the motors' commanded positions at the end of the grip are the same
+    at 0.5, 1 and 2 ms (to 1e-6 rad; one action apart they differed by 0.0094 rad)."""
+    ends = []
+    for ts in (0.0005, 0.001, 0.002):
+        env = HandshakeEnv(timestep_s=ts)
+        ctrl = make_controller("open-loop")
+        obs, info = env.reset(seed=0)
+        while info["phase"] != "hold":
+            obs, _, _, _, info = env.step(ctrl(obs, info))
+        ends.append(env.data.act[:6].copy())
+        env.close()
+    np.testing.assert_allclose(ends[0], ends[1], atol=1e-6)
+    np.testing.assert_allclose(ends[1], ends[2], atol=1e-6)
+
+
 def test_partner_joints_stay_within_their_ranges_under_a_5x_squeeze():
     """Joint limits hold within 3 deg over a full episode with the partner gripping 5x harder and
     the prosthetic closing open loop (without armature the distal joints went 0.95 rad past)."""

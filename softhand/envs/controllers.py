@@ -31,7 +31,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from softhand.envs.partner import HOLDING, RELEASING
+from softhand.envs.partner import CLOCK_SLACK_S, HOLDING, RELEASING
 from softhand.validate import check_number
 
 __all__ = ["CONTROLLERS", "SIGNALS", "ForceRegulating", "Neutral", "OpenLoopClose",
@@ -171,7 +171,8 @@ class OpenLoopClose(_Controller):
         a = np.zeros((w.n, 6))
         g, r = w.gripping, w.releasing
         start[g & np.isnan(start)] = w.time_s[g & np.isnan(start)]
-        a[g, :5] = np.where(w.time_s[g] - start[g] < self.close_s, self.speed, 0.0)[:, None]
+        a[g, :5] = np.where(w.time_s[g] - start[g] < self.close_s - CLOCK_SLACK_S, self.speed,
+                            0.0)[:, None]
         a[g, 5] = _thumb_to_handshake(w)[g]
         start[r] = np.nan
         a[r, :5] = -1.0  # open; the thumb keeps its rotation (_RELEASE)

@@ -135,13 +135,22 @@ def _min_jerk(s):
     return math.pow(s, 3.0) * (10.0 - 15.0 * s + 6.0 * s * s)
 
 
+#: Slack (s) of every comparison of the simulation clock with a scripted time. MuJoCo's clock is
+#: a sum of timesteps and lands on a scripted time from either side, by the timestep (after 500
+#: steps of 2 ms it reads 0.9999999999999998 s, after 1000 of 1 ms 1.0000000000000007 s): without
+#: the slack a phase, or a command that lasts a scripted time, ended one action apart at two
+#: timesteps (the open-loop close: one action more at 1 ms, every motor 0.5 deg further closed,
+#: the middle phalanges 8-10 % apart in the shake and the hold).
+CLOCK_SLACK_S = 1e-9
+
+
 @njit(cache=True, inline="always")
 def phase_at(ends: np.ndarray, t: float) -> int:
     """Index in PHASES at time ``t`` (s) of one world whose phases but ``done`` end at ``ends``
     (its Timeline.ends; compiled, for the per-step kernels and the single env)."""
     k = 0
     for e in ends:
-        k += e <= t
+        k += e <= t + CLOCK_SLACK_S
     return min(k, len(PHASES) - 1)
 
 
