@@ -26,8 +26,8 @@ handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impeda
 grasp plus a flexion offset): a PI regulator sets the effort so that the summed force its
 phalanges feel (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors
 on the subjects' fingers; the palm and thenar are left out, so that a push on the palm does not
-open the fingers) follows 2.5 N (a data glove's mean per sensor, Melnyk et al. 2014) times
-``squeeze`` times GRIP_PHALANGES. Shake amplitude: +-5 mm
+open the fingers) follows GRIP_FORCE_N times ``squeeze`` times GRIP_PHALANGES (GRIP_FORCE_N
+says what Melnyk et al. 2014 published and what is read into it). Shake amplitude: +-5 mm
 vertically (assumption: only the *relative* motion of the two hands is modelled; the arm's gross
 shake moves both hands together and is left out, "a scene models only what it needs").
 """
@@ -73,7 +73,15 @@ PHASES = ("reach", "grip", "shake", "hold", "release", "return", "done")
 HOLDING = ("grip", "shake", "hold")
 #: Phases in which the hands let go
 RELEASING = ("release", "return", "done")
-GRIP_FORCE_N = 2.5  # Melnyk et al. 2014: average grip force near 2.5 N (per data-glove sensor)
+#: Grip per phalanx (N). Melnyk, Borysenko & Henaff (2014, IEEE/ASME AIM, pp. 1753-1758) measured
+#: handshakes between people with "a special pair of data gloves" and report that the "average
+#: strength of the grip is 2.5 N" (their abstract, the only part of the paper this project could
+#: read): not how many sensors, where on the hand, or whether per sensor or for the whole grip.
+#: assumption: per sensor, one sensor a phalanx, so the grip is this per touching phalanx
+#: (GRIP_PHALANGES). No other handshake between two people with a published grip force was
+#: found (Orefice et al. 2018, RO-MAN, and Knoop et al. 2017, IROS, measured pressures whose
+#: numbers could not be read; Cabibihan et al. 2011 give where the force is high, not how high).
+GRIP_FORCE_N = 2.5
 #: Phalanges the grip force is summed over (its target is GRIP_FORCE_N x this). assumption: the
 #: partner phalanges that touch the other hand in the grasp of two 190 x 88 mm hands (the paper's
 #: experimenter's size); a person's grip does not grow with how many phalanges happen to touch.

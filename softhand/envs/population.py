@@ -8,8 +8,9 @@ distributions; each quantity, its distribution (normal ones truncated at +-2.5 S
 - hand length: normal, 187.5 +- 11.37 mm; paper Table 1 (subjects)
 - hand width: normal, 89.53 +- 6.80 mm, independent of the length; paper Table 1 (independence is
   an assumption: Table 1 gives no correlation)
-- grip per phalanx: normal, 2.5 +- 0.5 N; mean: Melnyk et al., IEEE AIM 2014 (data gloves); SD:
-  an assumption (20 %)
+- grip per phalanx: normal, 2.5 +- 0.5 N; mean: Melnyk et al., IEEE AIM 2014 (data gloves; their
+  "average strength of the grip", read as per phalanx: an assumption,
+  softhand.envs.partner.GRIP_FORCE_N); SD: an assumption (20 %)
 - duration: normal, 3.63 +- 0.45 s, Cabibihan et al., Front. Robot. AI 2022, as a factor on the
   timeline's phases (softhand.envs.partner.Timeline: 4.15 s, its closing and opening phases
   added to the published 3.63 s): the partner's duration is 4.15 s x (drawn / 3.63), and the

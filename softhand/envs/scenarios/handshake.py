@@ -124,8 +124,8 @@ class HandshakeScenario(Scenario):
         contact, _ = partner_contact_pose(self._config)
         # the partner's arm presses its palm onto the other's: its mount aims past the grasp
         contact = contact + press_offset(self._config.partner_arm, "hum_")
-        # the grip: GRIP_FORCE_N per phalanx (a data glove's mean per sensor, Melnyk et al. 2014)
-        # on GRIP_PHALANGES phalanges, summed
+        # the grip: GRIP_FORCE_N per phalanx (Melnyk et al. 2014's average grip, read as per
+        # phalanx: an assumption, softhand.envs.partner.GRIP_FORCE_N) on GRIP_PHALANGES, summed
         self.script = PartnerScript(self.timeline.scaled(factor), start, contact,
                                     grip_force_N=grip * GRIP_PHALANGES, shake_phase=phase,
                                     **partner_postures(self.grasp, *self._range.T))
