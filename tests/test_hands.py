@@ -646,3 +646,59 @@ def test_a_finger_on_a_former_palm_seam_presses_one_skin(name, where, normal, ax
                for c in (data.contact[i] for i in range(data.ncon))]
     assert len(touched) == 1, (name, touched)
     assert touched[0][0] == "pro_skin_Palm" and touched[0][1] == pytest.approx(0.002, abs=2e-5)
+
+
+@pytest.mark.parametrize("flex_rad", [0.0, 0.8, 1.4])
+def test_a_finger_across_a_knuckle_makes_no_two_contacts_within_a_seam(flex_rad):
+    """Issue 35, item 2's knuckles: a partner finger (a 9 mm capsule, 12 mm long, across the
+    digit) pressed 2 mm onto each finger and thumb joint of the prosthetic hand (MCP, PIP, DIP;
+    the thumb's MCP and IP), from the back and from the palm, straight and flexed, makes no two
+    contacts with skins closer than the seam distance (softhand.envs.run.SEAM_M, 2 mm): where it
+    touches both sides of a joint those are two indentations, one per phalanx (measured at least
+    8.4 mm apart, DIP straight), not one resisted twice. The thenar's seam with the palm is the
+    one seam left (test_a_finger_on_a_former_palm_seam_presses_one_skin's docstring)."""
+    import itertools
+
+    from softhand.envs.run import SEAM_M
+
+    spec = build_prosthetic_hand()
+    probe = spec.worldbody.add_body(name="probe", mocap=True)
+    probe.add_geom(name="probe", type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.009, 0.006, 0],
+                   fromto=[0, -0.006, 0, 0, 0.006, 0], contype=0, conaffinity=0)
+    for s in [g.name for g in spec.geoms if g.name.startswith("pro_skin_")]:
+        spec.add_pair(geomname1=s, geomname2="probe")
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    probe_id = model.geom("probe").id
+    skins = [g for g in range(model.ngeom) if model.geom(g).name.startswith("pro_skin_")]
+    for j in range(model.njnt):  # every flexing joint flexed (inside its range); rotation kept
+        if (model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
+                and not model.joint(j).name.endswith("rot")):
+            lo, hi = model.jnt_range[j]
+            data.qpos[model.jnt_qposadr[j]] = np.clip(flex_rad, lo, hi)
+    joints = [b for b in range(model.nbody)
+              if model.body(b).name.endswith(("_proximal", "_middle", "_distal"))]
+    assert len(joints) == 14
+    ft, quat = np.zeros(6), np.zeros(4)
+    pressed = 0
+    for b, side in itertools.product(joints, (1.0, -1.0)):
+        mujoco.mj_kinematics(model, data)
+        rot = data.xmat[b].reshape(3, 3)
+        normal = side * rot[:, 2]  # the segment's back (+) or palm (-) at its joint
+        mujoco.mju_mat2Quat(quat, rot.flatten())
+        data.mocap_quat[0] = quat  # the probe's axis along the joint's, across the digit
+        data.mocap_pos[0] = data.xpos[b] + 0.05 * normal
+        for _ in range(12):  # move the finger in until it is 2 mm into the nearest skin
+            mujoco.mj_kinematics(model, data)
+            dist = min(mujoco.mj_geomDistance(model, data, g, probe_id, 0.2, ft) for g in skins)
+            data.mocap_pos[0] -= (dist + 0.002) * normal
+        mujoco.mj_forward(model, data)
+        contacts = [(int(c.geom1) + int(c.geom2) - probe_id, c.pos.copy(), -c.dist)
+                    for c in (data.contact[i] for i in range(data.ncon))]
+        where = f"{model.body(b).name}, {'back' if side > 0 else 'palm'}"
+        pressed += bool(contacts) and max(c[2] for c in contacts) >= 0.0019
+        for a, c in itertools.combinations(contacts, 2):
+            if a[0] != c[0]:
+                assert np.linalg.norm(a[1] - c[1]) >= SEAM_M, (where, model.geom(a[0]).name,
+                                                             model.geom(c[0]).name)
+    assert pressed == 28, pressed  # every joint, back and palm, pressed 2 mm into a skin
