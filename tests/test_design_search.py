@@ -203,6 +203,36 @@ def test_three_trial_search_runs_and_resumes_the_same_study(tmp_path):
         run_search(space, trials=6, out=tmp_path, mesh="default", resume=True)
 
 
+def test_two_contact_points_screen_the_same_candidates_within_the_stated_tolerance(tmp_path):
+    """--contact-points 2 (issue 38, item 6: the faster FE, opt-in): the same seed draws the same
+    3 candidates, whose lifelike distance moves by at most 0.5 percentage points (measured 0.34,
+    coarse mesh) and durability usage by at most 5 %; the study keeps its choice, and a
+    --resume with the other one is refused naming both."""
+    space = DesignSpace(materials=("ecoflex-00-30", "dragon-skin-10"))
+    runs = {cp: run_search(space, trials=3, out=tmp_path / str(cp), mesh="coarse",
+                           contact_points=cp) for cp in (4, 2)}
+    assert runs[2].study.user_attrs["config"]["contact_points"] == 2
+    for a, b in zip(runs[4].study.trials, runs[2].study.trials, strict=True):
+        assert a.params == b.params
+        assert b.values[0] == pytest.approx(a.values[0], abs=0.5)
+        assert b.values[1] == pytest.approx(a.values[1], rel=0.05)
+    with pytest.raises(ValueError, match=r"contact_points 2 \(the journal\) vs 4 \(this run\)"):
+        run_search(space, trials=4, out=tmp_path / "2", mesh="coarse", resume=True)
+
+
+def test_a_study_from_before_the_contact_points_choice_resumes_with_four(tmp_path):
+    """A journal written before --contact-points existed has no such key: it was screened with
+    4, so a --resume with the default continues it and one with 2 is refused."""
+    space = DesignSpace(materials=("dragon-skin-10",))
+    study = run_search(space, trials=1, out=tmp_path, mesh="coarse").study
+    old = {k: v for k, v in study.user_attrs["config"].items() if k != "contact_points"}
+    study.set_user_attr("config", old)
+    with pytest.raises(ValueError, match=r"contact_points 4 \(the journal\) vs 2 \(this run\)"):
+        run_search(space, trials=2, out=tmp_path, mesh="coarse", resume=True, contact_points=2)
+    again = run_search(space, trials=2, out=tmp_path, mesh="coarse", resume=True)
+    assert (again.done_before, again.ran) == (1, 1)
+
+
 def test_an_interrupted_trial_is_failed_and_not_counted(tmp_path):
     space = DesignSpace(materials=("dragon-skin-10",))
     s = run_search(space, trials=1, out=tmp_path, mesh="coarse")
@@ -276,6 +306,7 @@ def test_search_command_writes_table_picture_and_stls_and_resumes(tmp_path):
     (["--trials", "0"], "'--trials': 0 is not in the range x>=1"),
     pytest.param(["--cluster", "tcp://127.0.0.1:9"], "--cluster", marks=pytest.mark.slow),
     (["--max-force", "1"], "'--max-force': '1' is outside the allowed range 2 <= x <= 20 N"),
+    (["--contact-points", "3"], "'--contact-points': '3' is not one of '2', '4'"),
 ])
 def test_search_command_bad_input_is_one_line_naming_the_flag(tmp_path, args, words):
     base = {"--trials": "3", "--out": str(tmp_path / "x")}

@@ -56,11 +56,14 @@ def _delta(a: float | None, b: float | None) -> float | None:
 
 
 def check_in_3d(rows: list[dict[str, Any]], *, mesh: str = "default", max_force_N: float = 2.0,
-                threads: int | None = 1, cluster: str | None = None) -> dict[str, Any]:
+                threads: int | None = 1, cluster: str | None = None,
+                contact_points: int = 4) -> dict[str, Any]:
     """The 3D quarter model of each row's candidate and of `BASELINE` (2D and 3D), with the
     differences 3D - 2D of each objective and of the indentation at 2 N."""
-    s3 = screen_settings(mode="3d", mesh=mesh, max_force_N=max_force_N)
-    s2 = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N)
+    s3 = screen_settings(mode="3d", mesh=mesh, max_force_N=max_force_N,
+                         contact_points=contact_points)
+    s2 = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
+                         contact_points=contact_points)
     tasks = [(f"trial-{r['trial']}", (candidate_of(r), s3)) for r in rows]
     tasks += [("baseline-3d", (BASELINE, s3)), ("baseline-2d", (BASELINE, s2))]
     out = run_tasks(evaluate, tasks, threads=None if cluster else threads, cluster=cluster)
@@ -208,17 +211,18 @@ def table_markdown(data: dict[str, Any]) -> str:
 
 def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "default",
                   max_force_N: float = 2.0, threads: int | None = 1,
-                  cluster: str | None = None, extra: dict[str, Any] | None = None
-                  ) -> dict[str, Any]:
+                  cluster: str | None = None, extra: dict[str, Any] | None = None,
+                  contact_points: int = 4) -> dict[str, Any]:
     """The 3D check of up to ``check`` winners, then ``designs.{json,md}``, ``pareto.png`` and
     the STLs into ``out`` (each file written whole)."""
     out = Path(out)
     trials = completed(study)
     front = pareto_evaluations(study)
-    base_2d = evaluate(BASELINE, screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N))
+    base_2d = evaluate(BASELINE, screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
+                                                 contact_points=contact_points))
     winners = choose_winners(front, check, below=base_2d.lifelike_distance_pct)
     checked = check_in_3d(winners, mesh=mesh, max_force_N=max_force_N, threads=threads,
-                          cluster=cluster)
+                          cluster=cluster, contact_points=contact_points)
     (out / "stl").mkdir(parents=True, exist_ok=True)
     for i, w in enumerate(checked["winners"], 1):
         cand = candidate_of(w)

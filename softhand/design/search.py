@@ -55,20 +55,26 @@ def make_sampler(name: str, seed: int | None):
     raise ValueError(f"sampler = {name!r}: allowed {', '.join(SAMPLERS)}")
 
 
-def _config(space: DesignSpace, mesh: str, max_force_N: float) -> dict[str, Any]:
+#: The FE's contact points per face direction of a study made before they could be chosen
+_CONTACT_POINTS_BEFORE = 4
+
+
+def _config(space: DesignSpace, mesh: str, max_force_N: float,
+            contact_points: int = _CONTACT_POINTS_BEFORE) -> dict[str, Any]:
     return {"bounds": {k: list(v) for k, v in space.bounds.items()},
             "materials": list(space.materials), "mesh": mesh, "max_force_N": max_force_N,
-            "objectives": list(OBJECTIVES)}
+            "contact_points": contact_points, "objectives": list(OBJECTIVES)}
 
 
 def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
                seed: int | None = 0, resume: bool = False, mesh: str = "default",
-               max_force_N: float = 2.0):
+               max_force_N: float = 2.0, contact_points: int = _CONTACT_POINTS_BEFORE):
     """The study in ``out/journal.log``: new, or (``resume``) the one there.
 
     Raises:
         ValueError: a journal exists without ``resume``; ``resume`` without a journal; or a
-            journal of another space, mesh or force (naming the difference).
+            journal of another space, mesh, force or number of contact points (naming the
+            difference).
     """
     import optuna
     from optuna.storages import JournalStorage
@@ -84,13 +90,15 @@ def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
     Path(out).mkdir(parents=True, exist_ok=True)
     storage = JournalStorage(JournalFileBackend(str(path)))
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    config = _config(space, mesh, max_force_N)
+    config = _config(space, mesh, max_force_N, contact_points)
     study = optuna.create_study(study_name=STUDY, storage=storage, load_if_exists=resume,
                                 directions=["minimize"] * len(OBJECTIVES),
                                 sampler=make_sampler(sampler, seed))
     if resume and seed is not None:  # a fresh stream: the seed's first draws were made already
         study.sampler = make_sampler(sampler, seed + len(study.get_trials(deepcopy=False)))
     old = study.user_attrs.get("config")
+    if old is not None and "contact_points" not in old:  # a study from before the choice
+        old = {**old, "contact_points": _CONTACT_POINTS_BEFORE}
     if old is None:
         study.set_user_attr("config", config)
         study.set_user_attr("sampler", sampler)
@@ -160,11 +168,14 @@ class SearchOutcome:
 def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | None = 0,
                sampler: str = "tpe", resume: bool = False, mesh: str = "default",
                max_force_N: float = 2.0, threads: int | None = 1, cluster: str | None = None,
-               progress: Callable[[int, int], None] | None = None) -> SearchOutcome:
+               progress: Callable[[int, int], None] | None = None,
+               contact_points: int = 4) -> SearchOutcome:
     """Run (or continue) the 2D screen until ``trials`` trials have finished.
 
     Args:
         trials: total finished trials wanted in the study (a resume counts those in the journal).
+        contact_points: the FE's contact points per face direction in every run
+            (`screen_settings`): 4, the shipped runs' answers, or 2, about twice as fast.
         threads: local worker processes (1: this process, one trial at a time; N: batches of
             4 N trials, the sampler asked for all of a batch before it runs); not with
             ``cluster``.
@@ -187,12 +198,13 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
                          f"library (durability cannot be scored); allowed: {allowed}")
     t0 = time.perf_counter()
     study = open_study(out, space, sampler=sampler, seed=seed, resume=resume, mesh=mesh,
-                       max_force_N=max_force_N)
+                       max_force_N=max_force_N, contact_points=contact_points)
     _close_stale(study)
     before = _counted(study)
     if progress:
         progress(before, trials)
-    settings = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N)
+    settings = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
+                               contact_points=contact_points)
     workers = 1 if cluster is not None else max(1, threads or 1)
     # local workers start with each batch (parallel.run_tasks): batches of 4 per worker amortise
     # that; the cluster's workers stay up, 8 at a time keep them busy
