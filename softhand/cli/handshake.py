@@ -233,7 +233,8 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
         pads = ("" if hold["qlv_decay_pct"] is None else
                 f"; {hold['pad_share_pct']:.0f} % of it through relaxation pads, whose QLV laws "
                 f"give {-hold['qlv_decay_pct']:+.1f} %")
-        click.echo(f"hold ({hold['hold_s']:.2f} s still): the force between the hands "
+        click.echo(f"hold ({hold['hold_s']:.2f} s still, read from {hold['settle_s']:.2f} s in, "
+                   "once the shake's swing has died out): the force between the hands "
                    f"{hold['force_start_N']:.1f} -> {hold['force_end_N']:.1f} N "
                    f"({-hold['decay_pct']:+.1f} %){pads}; counted twice at skin seams while "
                    f"the hands hold: {twice['double_share_pct']:.1f} %")
