@@ -145,11 +145,9 @@ def audit(seed: int = 0, hand: str = "prosthetic", timestep_s: float = 0.002,
     }
 
 
-def step_cost_us(seed: int = 0, at_s: float = 1.9, steps: int = 2000, repeats: int = 5) -> float:
-    """Median over ``repeats`` of the mean wall time (us) of one mj_step of the default scene
-    from its state at ``at_s`` (mid-shake), a copy of the data stepped ``steps`` times."""
-    import time
-
+def mid_shake(seed: int = 0, at_s: float = 1.9, options: dict | None = None):
+    """(model, data) of the default scene (neutral controller) stepped to ``at_s`` (mid-shake),
+    with MuJoCo ``options`` (fields of ``model.opt``) set first."""
     import gymnasium as gym
 
     import softhand.envs  # noqa: F401
@@ -157,10 +155,23 @@ def step_cost_us(seed: int = 0, at_s: float = 1.9, steps: int = 2000, repeats: i
 
     env = gym.make("softhand/Handshake-v0").unwrapped
     m, d = env.model, env.data
+    for key, value in (options or {}).items():
+        setattr(m.opt, key, value)
     policy = make_controller("neutral")
     obs, info = env.reset(seed=seed)
     while d.time < at_s:
         obs, *_, info = env.step(policy(obs, info))
+    return m, d
+
+
+def step_cost_us(seed: int = 0, at_s: float = 1.9, steps: int = 2000, repeats: int = 5,
+                 options: dict | None = None) -> float:
+    """Median over ``repeats`` of the mean wall time (us) of one mj_step of the default scene
+    from its state at ``at_s`` (`mid_shake`, with ``options``), a copy of the data stepped
+    ``steps`` times."""
+    import time
+
+    m, d = mid_shake(seed, at_s, options)
     times = []
     for _ in range(repeats):
         copy = mujoco.MjData(m)

@@ -5,7 +5,7 @@ time (the friction cone, the solver, its iterations and tolerances, the Jacobian
 the neutral, force and open-loop controllers at seeds 0 and 1, and reports for each:
 
 - the cost of one ``mj_step`` at mid-shake (t = 1.9 s, neutral, seed 0): the median of 5 runs of
-  2000 steps from a copy of the state, in one process (`step_cost_us`);
+  2000 steps from a copy of the state, in one process (load_path_audit's `step_cost_us`);
 - the largest change of a region's peak and mean force against the shipped settings, over the
   regions whose peak passes 1 N (relative, %), and where it is.
 
@@ -18,11 +18,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
-import time
 
 import mujoco
-import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from load_path_audit import mid_shake, step_cost_us  # the same mj_step timing
 
 CONTROLLERS = ("neutral", "force", "open-loop")
 SEEDS = (0, 1)
@@ -59,42 +61,14 @@ def _table(setting: dict, controller: str, seed: int) -> dict:
     return run_handshake(controller=controller, seed=seed, env=_env(setting)).table()
 
 
-def step_cost_us(setting: dict, at_s: float = 1.9, steps: int = 2000,
-                 repeats: int = 5) -> float:
-    from softhand.envs.controllers import make_controller
-
-    env = _env(setting)
-    m, d = env.model, env.data
-    policy = make_controller("neutral")
-    obs, info = env.reset(seed=0)
-    while d.time < at_s:
-        obs, *_, info = env.step(policy(obs, info))
-    times = []
-    for _ in range(repeats):
-        copy = mujoco.MjData(m)
-        mujoco.mj_copyData(copy, m, d)
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            mujoco.mj_step(m, copy)
-        times.append((time.perf_counter() - t0) / steps * 1e6)
-    return float(np.median(times))
-
-
 #: MuJoCo's timers reported per step (the parts of an mj_step)
 PARTS = {"collision": "mjTIMER_POS_COLLISION", "of it narrowphase": "mjTIMER_COL_NARROW",
          "constraint (assembly and solver)": "mjTIMER_CONSTRAINT", "step": "mjTIMER_STEP"}
 
 
-def step_parts_us(steps: int = 2000, at_s: float = 1.9) -> dict[str, float]:
+def step_parts_us(steps: int = 2000) -> dict[str, float]:
     """The shipped scene's mj_step at mid-shake split by MuJoCo's own timers (us per step)."""
-    from softhand.envs.controllers import make_controller
-
-    env = _env({})
-    m, d = env.model, env.data
-    policy = make_controller("neutral")
-    obs, info = env.reset(seed=0)
-    while d.time < at_s:
-        obs, *_, info = env.step(policy(obs, info))
+    m, d = mid_shake()
     copy = mujoco.MjData(m)
     mujoco.mj_copyData(copy, m, d)
     before = {k: copy.timer[getattr(mujoco.mjtTimer, t)].duration for k, t in PARTS.items()}
@@ -127,7 +101,7 @@ def measure() -> dict:
                             worst["where"] = f"{case[0]}, seed {case[1]}, {region}"
         out[name] = {"setting": {k: int(v) if not isinstance(v, float) else v
                                  for k, v in setting.items()},
-                     "step_us": step_cost_us(setting), **worst}
+                     "step_us": step_cost_us(options=setting), **worst}
     out["shipped"]["parts_us"] = step_parts_us()
     m = _env({}).model
     mesh = sum(mujoco.mjtGeom.mjGEOM_MESH in (m.geom_type[m.pair_geom1[p]],
