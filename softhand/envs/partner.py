@@ -144,11 +144,12 @@ def _min_jerk(s):
 
 
 #: Slack (s) of every comparison of the simulation clock with a scripted time. MuJoCo's clock is
-#: a sum of timesteps and lands on a scripted time from either side, by the timestep (after 500
-#: steps of 2 ms it reads 0.9999999999999998 s, after 1000 of 1 ms 1.0000000000000007 s): without
-#: the slack a phase, or a command that lasts a scripted time, ended one action apart at two
-#: timesteps (the open-loop close: one action more at 1 ms, every motor 0.5 deg further closed,
-#: the middle phalanges 8-10 % apart in the shake and the hold).
+#: a sum of timesteps and lands on a scripted time from either side, by the timestep (the
+#: open-loop close, 0.8 s from the grip's start, measured 0.8000000000000006 s at 2 ms and
+#: 0.7999999999999184 s at 1 ms): without the slack a phase, or a command that lasts a scripted
+#: time, ended one action apart at two timesteps (the open-loop close: one action more at 1 ms,
+#: every motor 0.5 deg further closed, the middle phalanges 8-10 % apart in the shake and the
+#: hold).
 CLOCK_SLACK_S = 1e-9
 
 

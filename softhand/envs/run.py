@@ -299,12 +299,12 @@ class HandshakeRun:
     def hold_relaxation(self, *, window_s: float = 0.05,
                         settle_s: float = HOLD_SETTLE_S) -> dict[str, float]:
         """What the motionless hold shows, once the shake's last swing has died out
-        (``settle_s`` into the hold, HOLD_SETTLE_S): the force between the hands over the first
-        and last ``window_s`` after that (N, means) and its fall (``decay_pct``); on relaxation
-        pads, the fall the
-        skins' QLV laws give for the pads' own compression histories, weighted by the force each
-        pad carries (``qlv_decay_pct``: sum over the pads of F_QLV(t, x(t)) at the end against
-        the start), and the share of the hold's force between the hands that went through a
+        (``settle_s`` into the hold, HOLD_SETTLE_S; a shorter hold, from where its two windows
+        still fit; ``settle_s`` in the result): the force between the hands over the first and
+        last ``window_s`` after that (N, means) and its fall (``decay_pct``); on relaxation pads,
+        the fall the skins' QLV laws give for the pads' own compression histories, weighted by
+        the force each pad carries (``qlv_decay_pct``: sum over the pads of F_QLV(t, x(t)) at
+        the end against the start), and the share of the hold's force between the hands that went through a
         pad's spring (``pad_share_pct``; the rest meets the tissue's law alone). In the hold the
         partner keeps its grip effort instead of regulating the force
         (softhand.envs.partner.HOLD_KEEPS_EFFORT), so a skin's relaxation can show as a fall of
