@@ -34,7 +34,8 @@ import scipy.sparse as sp
 
 from softhand.fem.mesh import Mesh, face_element
 
-__all__ = ["GapSet", "RoundGaps", "plate_gaps", "pocket_gaps"]
+__all__ = ["POCKET_CONTACTS", "GapSet", "PairedPocket", "PocketContact", "RoundGaps", "plate_gaps",
+           "pocket_contact", "pocket_gaps"]
 
 
 @dataclass(frozen=True)
@@ -189,8 +190,183 @@ class RoundGaps:
         return float(penalty * (self.weight * np.maximum(-g, 0.0) * -n[:, 1]).sum())
 
 
+def _face_windows(faces: np.ndarray, seeds: np.ndarray, rings: int) -> np.ndarray:
+    """Per seed face, the faces within ``rings`` steps of it over shared nodes (the seed
+    first), padded with -1 to one width."""
+    node_faces: dict[int, list[int]] = {}
+    for f, row in enumerate(faces):
+        for a in set(row.tolist()):
+            node_faces.setdefault(a, []).append(f)
+    near = [sorted({g for a in set(row.tolist()) for g in node_faces[a]}) for row in faces]
+    windows = []
+    for f in seeds.tolist():
+        seen, frontier = {f}, {f}
+        for _ in range(rings):
+            frontier = {g for h in frontier for g in near[h]} - seen
+            seen |= frontier
+        windows.append([f, *sorted(seen - {f})])
+    width = max(len(w) for w in windows)
+    return np.array([w + [-1] * (width - len(w)) for w in windows], dtype=np.int64)
+
+
+class PocketContact:
+    """The closing pocket: the floor and the pocket's side wall against the roof.
+
+    Large sliding, node-to-surface at Gauss points, one pass: each Gauss point ``x_s`` of the
+    floor and of the side wall (the slave faces) is projected on the current roof underside
+    (the master): ``x_m``, the closest point of the quadratic roof faces within ``rings`` faces
+    of the one nearest it at rest. Its gap is ``g = (x_s - x_m) . n``, ``n`` the roof's unit
+    normal there pointing into the pocket (beyond a face's edge, the unit vector from ``x_m``
+    to ``x_s``: the gap is then the distance, continuous across the edge). Linearised as
+    `RoundGaps` is, ``G = n^T (N_s - N_m)`` with the projection held (the curvature terms
+    dropped); `softhand.fem.solver` holds one linearisation through a Newton pass and projects
+    again at its solution. Each row of ``G`` couples the slave face's dofs with those of the
+    roof face it projects on; the compiled engine's pattern follows it
+    (`softhand.fem.linear.TangentSystem.set_contact`).
+
+    Why not the pairing by surface coordinates this replaced (roof and floor points at the same
+    place on their faces, the gap along the floor's normal at rest): under a plate the roof
+    flattens and spreads sideways while the floor keeps its dome, so the point the roof meets
+    is no longer the one it faced at rest. Paired that way, the floor of pocket2-sil passed
+    through the flattened roof by 0.11 mm at 2 N and 0.66 mm at 20 N (2D, default mesh) while
+    every paired gap stayed above -0.004 mm; soft designs pinched elements there until Newton
+    failed near 4 mm of plate travel. And the side wall had no contact: at 16 N the pocket's
+    corner folded through the roof.
+
+    The rows: the floor's Gauss points first, in `_face_geometry` order (what the pocket-floor
+    sensor reads, `floor_gaps`), then the side wall's.
+    """
+
+    def __init__(self, mesh: Mesh, n_gauss: int = 4, rings: int = 2) -> None:
+        dim = mesh.dim
+        self.mesh, self.dim = mesh, dim
+        walls = mesh.wall_faces if mesh.wall_faces is not None else np.zeros(
+            (0, mesh.floor_faces.shape[1]), dtype=np.int64)
+        self.slave = np.concatenate([mesh.floor_faces, walls]).astype(np.int64)
+        N, pos, _, weight = _face_geometry(mesh, self.slave, n_gauss)
+        self.N_s = N
+        self.weight = weight.ravel()
+        self.points = pos.reshape(-1, dim)
+        nf, nq = pos.shape[:2]
+        self.n_faces, self.nq = nf, nq
+        self.n_floor_points = len(mesh.floor_faces) * nq
+        roof = mesh.roof_faces
+        c_roof = mesh.X[roof].mean(axis=1)
+        c_slave = mesh.X[self.slave].mean(axis=1)
+        seeds = np.argmin(np.linalg.norm(c_slave[:, None] - c_roof[None], axis=-1), axis=1)
+        self.window = _face_windows(roof, seeds, rings)  # (nf, C), -1 padded
+        self.valid = self.window >= 0
+        # each roof face's normal points into the pocket: towards the floor face facing it
+        facing = np.argmin(np.linalg.norm(c_roof[:, None] - mesh.X[mesh.floor_faces].mean(
+            axis=1)[None], axis=-1), axis=1)
+        _, t = self._surface(mesh.X[roof], np.zeros((len(roof), dim - 1)))
+        n0 = self._normal(t)
+        towards = mesh.X[mesh.floor_faces].mean(axis=1)[facing] - c_roof
+        self.sign = np.where(np.einsum("fd,fd->f", towards, n0) < 0, -1.0, 1.0)
+        self.n_dofs = mesh.n_dofs
+        npf = self.slave.shape[1]
+        self._row_len = 2 * npf * dim
+        self._indptr = np.arange(nf * nq + 1) * self._row_len
+        self._slave_cols = np.repeat(
+            (self.slave[:, :, None] * dim + np.arange(dim)).reshape(nf, -1), nq, axis=0)
+        self.assigned: np.ndarray | None = None  # roof face per row of the last linearisation
+
+    def _filled(self) -> np.ndarray:
+        """The windows with their padding pointing at their seed face (never chosen)."""
+        return np.where(self.valid, self.window, self.window[:, :1])
+
+    @staticmethod
+    def _shape(xi: np.ndarray):
+        """Shape functions and their derivatives of a quadratic face at local ``xi``
+        (..., dim - 1), nodes in `softhand.fem.elements.reference_element` order."""
+        from softhand.fem.elements import lagrange_1d
+
+        N1, dN1 = lagrange_1d(xi[..., 0])
+        if xi.shape[-1] == 1:
+            return N1, dN1[..., None]
+        N2, dN2 = lagrange_1d(xi[..., 1])
+        N = (N2[..., :, None] * N1[..., None, :]).reshape(*xi.shape[:-1], 9)
+        d1 = (N2[..., :, None] * dN1[..., None, :]).reshape(*xi.shape[:-1], 9)
+        d2 = (dN2[..., :, None] * N1[..., None, :]).reshape(*xi.shape[:-1], 9)
+        return N, np.stack([d1, d2], axis=-1)
+
+    def _surface(self, xf: np.ndarray, xi: np.ndarray):
+        """Point and tangents of faces with nodes ``xf`` (..., npf, dim) at ``xi``."""
+        N, dN = self._shape(xi)
+        return np.einsum("...a,...ad->...d", N, xf), np.einsum("...aj,...ad->...dj", dN, xf)
+
+    def _normal(self, t: np.ndarray) -> np.ndarray:
+        n = (np.stack([t[..., 1, 0], -t[..., 0, 0]], axis=-1) if self.dim == 2
+             else np.cross(t[..., 0], t[..., 1]))
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def project(self, u: np.ndarray):
+        """Per row: the slave point, the roof face it projects on, the local coordinates there,
+        the closest point and the unit gap direction (module docstring)."""
+        dim, nf, nq = self.dim, self.n_faces, self.nq
+        x = self.mesh.X + u.reshape(-1, dim)
+        xs = np.einsum("qa,fad->fqd", self.N_s, x[self.slave])  # (nf, nq, dim)
+        win = self._filled()
+        C = win.shape[1]
+        xr = np.broadcast_to(x[self.mesh.roof_faces[win]][:, None],
+                             (nf, nq, C, *self.mesh.roof_faces.shape[1:], dim))
+        target = np.broadcast_to(xs[:, :, None, :], (nf, nq, C, dim))
+        xi = np.zeros((nf, nq, C, dim - 1))
+        for _ in range(8):  # Gauss-Newton on |x(xi) - x_s|^2, held inside the face
+            p, t = self._surface(xr, xi)
+            g = np.einsum("...d,...dj->...j", p - target, t)
+            H = np.einsum("...dj,...dk->...jk", t, t)
+            xi = np.clip(xi - np.linalg.solve(H, g[..., None])[..., 0], -1.0, 1.0)
+        p, t = self._surface(xr, xi)
+        dist = np.where(self.valid[:, None, :], np.linalg.norm(p - target, axis=-1), np.inf)
+        best = np.argmin(dist, axis=-1)  # (nf, nq) window slot
+
+        def take(a: np.ndarray) -> np.ndarray:
+            return np.take_along_axis(a, best.reshape(nf, nq, 1, *([1] * (a.ndim - 3))),
+                                      axis=2)[:, :, 0]
+
+        xi_b, p_b, t_b = take(xi), take(p), take(t)
+        face = np.take_along_axis(win, best.reshape(nf, -1), axis=1)  # (nf, nq)
+        n = self._normal(t_b) * self.sign[face][..., None]
+        v = xs - p_b
+        length = np.linalg.norm(v, axis=-1, keepdims=True)
+        side = np.where(np.einsum("fqd,fqd->fq", v, n) < 0, -1.0, 1.0)[..., None]
+        n = np.where(length > 1e-9, side * v / np.maximum(length, 1e-300), n)
+        return xs, face, xi_b, p_b, n
+
+    def linearised(self, u: np.ndarray) -> GapSet:
+        """The gaps at state ``u`` (exact) and their linearisation, as a `GapSet`; sets
+        `assigned`."""
+        dim = self.dim
+        xs, face, xi, p, n = self.project(u)
+        g = np.einsum("fqd,fqd->fq", xs - p, n).ravel()
+        Nm, _ = self._shape(xi)  # (nf, nq, npf)
+        nflat = n.reshape(-1, dim)
+        slave = (np.broadcast_to(self.N_s[None], Nm.shape)[..., None]
+                 * n[:, :, None, :]).reshape(len(nflat), -1)
+        master = -(Nm[..., None] * n[:, :, None, :]).reshape(len(nflat), -1)
+        roof = self.mesh.roof_faces[face.ravel()]  # (rows, npf)
+        roof_cols = (roof[:, :, None] * dim + np.arange(dim)).reshape(len(nflat), -1)
+        indices = np.concatenate([self._slave_cols, roof_cols], axis=1).ravel()
+        data = np.concatenate([slave, master], axis=1).ravel()
+        G = sp.csr_matrix((data, indices, self._indptr), shape=(len(nflat), self.n_dofs))
+        self.assigned = face.ravel().copy()
+        return GapSet(g - G @ u, G, self.weight, self.points)
+
+    def gaps(self, u: np.ndarray) -> np.ndarray:
+        """The gap at each row's point at state ``u`` (mm)."""
+        xs, _, _, p, n = self.project(u)
+        return np.einsum("fqd,fqd->fq", xs - p, n).ravel()
+
+    def floor_gaps(self, u: np.ndarray) -> np.ndarray:
+        """The gaps at the floor's Gauss points (the pocket-floor sensor's rows)."""
+        return self.gaps(u)[:self.n_floor_points]
+
+
 def pocket_gaps(mesh: Mesh, n_gauss: int = 4) -> GapSet | None:
-    """Gap between the pocket roof and floor along the floor's reference normal, or None."""
+    """Gap between the pocket roof and floor along the floor's reference normal, or None:
+    each floor Gauss point paired with the roof point at the same place on its face (small
+    sliding; `PairedPocket`)."""
     if mesh.floor_faces.size == 0:
         return None
     N, pos_f, normal, weight = _face_geometry(mesh, mesh.floor_faces, n_gauss)
@@ -202,3 +378,42 @@ def pocket_gaps(mesh: Mesh, n_gauss: int = 4) -> GapSet | None:
     G = (_gap_matrix(mesh, mesh.roof_faces, N, normal, 1.0)
          + _gap_matrix(mesh, mesh.floor_faces, N, normal, -1.0))
     return GapSet(gap0.ravel(), G.tocsr(), weight.ravel())
+
+
+class PairedPocket:
+    """The pocket's contact of the shipped FE curves: each floor Gauss point against the roof
+    point at the same place on its face, the gap along the floor's normal at rest
+    (`pocket_gaps`; linear in u, one `GapSet` for the run). Right while the roof closes onto
+    the floor without sliding along it; under a plate it does slide, and the floor's dome
+    passes through the flattened roof (`PocketContact`'s docstring has the numbers)."""
+
+    assigned = None  # one structure for the run
+
+    def __init__(self, gaps: GapSet) -> None:
+        self._gaps = gaps
+        self.n_floor_points = gaps.size
+
+    def linearised(self, u: np.ndarray) -> GapSet:
+        return self._gaps
+
+    def gaps(self, u: np.ndarray) -> np.ndarray:
+        return self._gaps.gaps(u)
+
+    floor_gaps = gaps
+
+
+#: The pocket contacts `pocket_contact` builds (`IndentationSettings.pocket_contact`).
+POCKET_CONTACTS = ("paired", "sliding")
+
+
+def pocket_contact(mesh: Mesh, n_gauss: int = 4, kind: str = "paired"
+                   ) -> PairedPocket | PocketContact | None:
+    """The pocket's contact, ``kind`` one of `POCKET_CONTACTS` (``paired``: `PairedPocket`;
+    ``sliding``: `PocketContact`), or None for a mesh without a pocket."""
+    if kind not in POCKET_CONTACTS:
+        raise ValueError(f"pocket_contact = {kind!r}: allowed {', '.join(POCKET_CONTACTS)}")
+    if mesh.floor_faces.size == 0:
+        return None
+    if kind == "paired":
+        return PairedPocket(pocket_gaps(mesh, n_gauss))
+    return PocketContact(mesh, n_gauss)

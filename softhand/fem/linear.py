@@ -307,6 +307,7 @@ class TangentSystem:
         self._entries = (np.arange(rows.size) if entries is None
                          else np.asarray(entries, dtype=np.int64))
         self._element_keys = c[keep] * n + r[keep]  # column-major: CSC order of the lower part
+        self._fmap = fmap
         self._contacts = [_point_pairs(G, fmap) for G in contacts]
         self._contact_nnz = [G.nnz for G in contacts]
         self._pair_keys = [p[4] * n + p[3] for p in self._contacts]
@@ -332,6 +333,7 @@ class TangentSystem:
         ukeys = np.insert(self._sorted_keys,
                           np.searchsorted(self._sorted_keys, extra), extra)
         self.nnz = ukeys.size
+        self._ukeys = ukeys
         inv = np.empty(self._element_keys.size, dtype=np.int64)
         inv[self._key_order] = (np.arange(self._sorted_keys.size)
                                 + np.searchsorted(extra, self._sorted_keys))
@@ -348,6 +350,24 @@ class TangentSystem:
         self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
         self._backend.analyse(n, self._rows, self._cols, self._indptr)
         self.stats["analyses"] += 1
+
+    def set_contact(self, i: int, G: sp.csr_matrix) -> None:
+        """Give contact set ``i`` a new structure (a sliding contact whose points now couple
+        other dofs: `softhand.fem.contact.PocketContact`), the same points. A point stays in
+        the pattern where the pattern holds all its new couplings; one that does not is added
+        when it is next closed (`values`: a new symbolic analysis)."""
+        pairs = _point_pairs(G, self._fmap)
+        keys = pairs[4] * self.n + pairs[3]
+        at = np.minimum(np.searchsorted(self._ukeys, keys), self._ukeys.size - 1)
+        held = self._ukeys[at] == keys
+        whole = np.ones(G.shape[0], dtype=bool)
+        np.logical_and.at(whole, pairs[0], held)
+        self._contacts[i], self._contact_nnz[i], self._pair_keys[i] = pairs, G.nnz, keys
+        self._active[i] &= whole
+        sel = self._active[i][pairs[0]]
+        dst = np.full(sel.size, -1, dtype=np.int64)
+        dst[sel] = at[sel]
+        self._contact_dst[i] = dst
 
     def _in_elements(self, keys: np.ndarray) -> np.ndarray:
         """Which of ``keys`` the elements' lower triangle holds."""

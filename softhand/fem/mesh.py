@@ -95,6 +95,9 @@ class Mesh:
         fixed: DOF indices held at zero (base and symmetry planes).
         outer_faces: node indices of the faces on the outer surface (n, 3**(dim-1)).
         roof_faces, floor_faces: facing pocket surfaces, paired row by row.
+        wall_faces: the pocket's side wall (the faces of the pocket band's solid side facing
+            the void), None where the mesh does not record it; `softhand.fem.contact.
+            PocketContact` presses it on the roof with the floor.
         symmetry_factor: multiplier from the modelled part to the whole phalanx force.
         length_mm: length the 2D force per unit length is multiplied by.
         spec: the element counts it was built from (`MeshSpec` for the phalanx; the palm's
@@ -119,6 +122,7 @@ class Mesh:
     length_mm: float
     spec: object = field(default_factory=MeshSpec)
     plate_half_mm: tuple[float, float] | None = None
+    wall_faces: np.ndarray | None = None
 
     @property
     def n_dofs(self) -> int:
@@ -227,7 +231,7 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
     local = [(p0, p1, p2) for p2 in range(3 if dim == 3 else 1) for p1 in range(3)
              for p0 in range(3)]
     elems, layer, void = [], [], []
-    roof_rows, floor_rows, outer_rows = [], [], []
+    roof_rows, floor_rows, outer_rows, wall_rows = [], [], [], []
     for kz in range(ez):
         for ki in range(ei):
             for kk in range(ek):
@@ -241,6 +245,8 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
                 e = len(elems) - 1
                 if kk == ek - 1:
                     outer_rows.append(e)
+                if geom.has_pocket and band == "pocket" and ki == n_side - 1:
+                    wall_rows.append(e)
                 if geom.has_pocket and ki >= n_side:
                     if band == "roof" and kk > 0 and bands[kk - 1] == "pocket":
                         roof_rows.append(e)
@@ -256,6 +262,8 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
     outer_faces = conn_all[outer_rows][:, face_hi]
     roof_faces = conn_all[roof_rows][:, face_lo].reshape(-1, npf)
     floor_faces = conn_all[floor_rows][:, face_hi].reshape(-1, npf)
+    face_side = [a for a, p in enumerate(local) if p[1] == 2]  # xi1 = +1: towards the void
+    wall_faces = conn_all[wall_rows][:, face_side].reshape(-1, npf)
     conn = conn_all[keep]
     layer = np.array(layer)[keep]
 
@@ -271,6 +279,7 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
     return Mesh(
         dim=dim, X=X, elements=conn, layer=layer, ref=ref, fixed=fixed,
         outer_faces=outer_faces, roof_faces=roof_faces, floor_faces=floor_faces,
+        wall_faces=wall_faces,
         symmetry_factor=2.0 if dim == 2 else 4.0,
         length_mm=geom.length_mm if dim == 2 else 1.0, spec=spec,
     )

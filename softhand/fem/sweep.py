@@ -181,8 +181,9 @@ def _settings_of(settings: IndentationSettings | dict[str, Any]) -> dict[str, An
     import json
 
     data = settings if isinstance(settings, dict) else asdict(settings)
-    # folders written before indenters and bodies hold plate curves on the phalanx
-    data = {"indenter": "plate", "body": "phalanx", **data}
+    # folders written before indenters, bodies and the pocket contact's choice hold plate
+    # curves on the phalanx with the paired pocket
+    data = {"indenter": "plate", "body": "phalanx", "pocket_contact": "paired", **data}
     return {k: v for k, v in json.loads(json.dumps(data, default=str)).items()
             if k not in ("threads", "engine", "solver")}
 
