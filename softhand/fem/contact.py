@@ -34,8 +34,8 @@ import scipy.sparse as sp
 
 from softhand.fem.mesh import Mesh, face_element
 
-__all__ = ["POCKET_CONTACTS", "GapSet", "PairedPocket", "PocketContact", "RoundGaps", "plate_gaps",
-           "pocket_contact", "pocket_gaps"]
+__all__ = ["POCKET_CONTACTS", "GapSet", "PairedPocket", "PocketContact", "RoundGaps",
+           "floor_through_roof_mm", "plate_gaps", "pocket_contact", "pocket_gaps"]
 
 
 @dataclass(frozen=True)
@@ -190,32 +190,14 @@ class RoundGaps:
         return float(penalty * (self.weight * np.maximum(-g, 0.0) * -n[:, 1]).sum())
 
 
-def _face_windows(faces: np.ndarray, seeds: np.ndarray, rings: int) -> np.ndarray:
-    """Per seed face, the faces within ``rings`` steps of it over shared nodes (the seed
-    first), padded with -1 to one width."""
-    node_faces: dict[int, list[int]] = {}
-    for f, row in enumerate(faces):
-        for a in set(row.tolist()):
-            node_faces.setdefault(a, []).append(f)
-    near = [sorted({g for a in set(row.tolist()) for g in node_faces[a]}) for row in faces]
-    windows = []
-    for f in seeds.tolist():
-        seen, frontier = {f}, {f}
-        for _ in range(rings):
-            frontier = {g for h in frontier for g in near[h]} - seen
-            seen |= frontier
-        windows.append([f, *sorted(seen - {f})])
-    width = max(len(w) for w in windows)
-    return np.array([w + [-1] * (width - len(w)) for w in windows], dtype=np.int64)
-
-
 class PocketContact:
     """The closing pocket: the floor and the pocket's side wall against the roof.
 
     Large sliding, node-to-surface at Gauss points, one pass: each Gauss point ``x_s`` of the
     floor and of the side wall (the slave faces) is projected on the current roof underside
-    (the master): ``x_m``, the closest point of the quadratic roof faces within ``rings`` faces
-    of the one nearest it at rest. Its gap is ``g = (x_s - x_m) . n``, ``n`` the roof's unit
+    (the master): ``x_m``, the closest point of all its quadratic faces (Gauss-Newton in each
+    face, held inside it; the pocket's roof has 9-30 faces, so no search window can miss
+    the face a point has slid onto). Its gap is ``g = (x_s - x_m) . n``, ``n`` the roof's unit
     normal there pointing into the pocket (beyond a face's edge, the unit vector from ``x_m``
     to ``x_s``: the gap is then the distance, continuous across the edge). Linearised as
     `RoundGaps` is, ``G = n^T (N_s - N_m)`` with the projection held (the curvature terms
@@ -227,17 +209,18 @@ class PocketContact:
     Why not the pairing by surface coordinates this replaced (roof and floor points at the same
     place on their faces, the gap along the floor's normal at rest): under a plate the roof
     flattens and spreads sideways while the floor keeps its dome, so the point the roof meets
-    is no longer the one it faced at rest. Paired that way, the floor of pocket2-sil passed
-    through the flattened roof by 0.11 mm at 2 N and 0.66 mm at 20 N (2D, default mesh) while
-    every paired gap stayed above -0.004 mm; soft designs pinched elements there until Newton
-    failed near 4 mm of plate travel. And the side wall had no contact: at 16 N the pocket's
-    corner folded through the roof.
+    is no longer the one it faced at rest. Paired that way, the floor of pocket2-sil passes
+    through the flattened roof by 0.12 mm at 2 N and 0.67 mm at 20 N (2D, default mesh) while
+    every paired gap stays above -0.004 mm, and the side wall, which has no contact there,
+    folds through the roof at the pocket's corner; soft designs pinch elements there until
+    Newton fails at 2.8-5.0 N. Sliding, the floor stays out of the roof within 0.005 mm to
+    20 N (reports/pocket-contact.md).
 
     The rows: the floor's Gauss points first, in `_face_geometry` order (what the pocket-floor
     sensor reads, `floor_gaps`), then the side wall's.
     """
 
-    def __init__(self, mesh: Mesh, n_gauss: int = 4, rings: int = 2) -> None:
+    def __init__(self, mesh: Mesh, n_gauss: int = 4) -> None:
         dim = mesh.dim
         self.mesh, self.dim = mesh, dim
         walls = mesh.wall_faces if mesh.wall_faces is not None else np.zeros(
@@ -252,10 +235,6 @@ class PocketContact:
         self.n_floor_points = len(mesh.floor_faces) * nq
         roof = mesh.roof_faces
         c_roof = mesh.X[roof].mean(axis=1)
-        c_slave = mesh.X[self.slave].mean(axis=1)
-        seeds = np.argmin(np.linalg.norm(c_slave[:, None] - c_roof[None], axis=-1), axis=1)
-        self.window = _face_windows(roof, seeds, rings)  # (nf, C), -1 padded
-        self.valid = self.window >= 0
         # each roof face's normal points into the pocket: towards the floor face facing it
         facing = np.argmin(np.linalg.norm(c_roof[:, None] - mesh.X[mesh.floor_faces].mean(
             axis=1)[None], axis=-1), axis=1)
@@ -270,10 +249,6 @@ class PocketContact:
         self._slave_cols = np.repeat(
             (self.slave[:, :, None] * dim + np.arange(dim)).reshape(nf, -1), nq, axis=0)
         self.assigned: np.ndarray | None = None  # roof face per row of the last linearisation
-
-    def _filled(self) -> np.ndarray:
-        """The windows with their padding pointing at their seed face (never chosen)."""
-        return np.where(self.valid, self.window, self.window[:, :1])
 
     @staticmethod
     def _shape(xi: np.ndarray):
@@ -306,10 +281,9 @@ class PocketContact:
         dim, nf, nq = self.dim, self.n_faces, self.nq
         x = self.mesh.X + u.reshape(-1, dim)
         xs = np.einsum("qa,fad->fqd", self.N_s, x[self.slave])  # (nf, nq, dim)
-        win = self._filled()
-        C = win.shape[1]
-        xr = np.broadcast_to(x[self.mesh.roof_faces[win]][:, None],
-                             (nf, nq, C, *self.mesh.roof_faces.shape[1:], dim))
+        roof = self.mesh.roof_faces
+        C = len(roof)
+        xr = np.broadcast_to(x[roof][None, None], (nf, nq, C, *roof.shape[1:], dim))
         target = np.broadcast_to(xs[:, :, None, :], (nf, nq, C, dim))
         xi = np.zeros((nf, nq, C, dim - 1))
         for _ in range(8):  # Gauss-Newton on |x(xi) - x_s|^2, held inside the face
@@ -318,15 +292,14 @@ class PocketContact:
             H = np.einsum("...dj,...dk->...jk", t, t)
             xi = np.clip(xi - np.linalg.solve(H, g[..., None])[..., 0], -1.0, 1.0)
         p, t = self._surface(xr, xi)
-        dist = np.where(self.valid[:, None, :], np.linalg.norm(p - target, axis=-1), np.inf)
-        best = np.argmin(dist, axis=-1)  # (nf, nq) window slot
+        best = np.argmin(np.linalg.norm(p - target, axis=-1), axis=-1)  # (nf, nq) roof face
 
         def take(a: np.ndarray) -> np.ndarray:
             return np.take_along_axis(a, best.reshape(nf, nq, 1, *([1] * (a.ndim - 3))),
                                       axis=2)[:, :, 0]
 
         xi_b, p_b, t_b = take(xi), take(p), take(t)
-        face = np.take_along_axis(win, best.reshape(nf, -1), axis=1)  # (nf, nq)
+        face = best
         n = self._normal(t_b) * self.sign[face][..., None]
         v = xs - p_b
         length = np.linalg.norm(v, axis=-1, keepdims=True)
@@ -400,6 +373,27 @@ class PairedPocket:
         return self._gaps.gaps(u)
 
     floor_gaps = gaps
+
+
+def floor_through_roof_mm(mesh: Mesh, u: np.ndarray, samples: int = 41) -> float:
+    """How far the pocket's floor lies inside the roof at state ``u`` (mm; 0: it does not),
+    from the geometry alone (2D): the floor's curve against the roof's, both sampled at
+    ``samples`` points a face, the floor's height above the roof's along y where they overlap
+    across. Independent of either contact's gap function, so that it can judge both."""
+    if mesh.dim != 2:
+        raise ValueError(f"mesh.dim = {mesh.dim}: the check is 2D (allowed: 2)")
+    from softhand.fem.elements import lagrange_1d
+
+    N, _ = lagrange_1d(np.linspace(-1.0, 1.0, samples))
+    x = mesh.X + u.reshape(-1, 2)
+    roof = np.einsum("qa,fad->fqd", N, x[mesh.roof_faces]).reshape(-1, 2)
+    floor = np.einsum("qa,fad->fqd", N, x[mesh.floor_faces]).reshape(-1, 2)
+    order = np.argsort(roof[:, 0])
+    across = (floor[:, 0] >= roof[order, 0].min()) & (floor[:, 0] <= roof[order, 0].max())
+    if not across.any():
+        return 0.0
+    y_roof = np.interp(floor[across, 0], roof[order, 0], roof[order, 1])
+    return float(max(0.0, (floor[across, 1] - y_roof).max()))
 
 
 #: The pocket contacts `pocket_contact` builds (`IndentationSettings.pocket_contact`).
