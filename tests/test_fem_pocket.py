@@ -149,3 +149,24 @@ def test_to_20_newton_the_floor_stays_under_the_roof_on_every_mesh():
     assert abs(depths[2] - depths[1]) < abs(depths[1] - depths[0])  # refinement converges
     paired = indent("pocket2-sil", IndentationSettings(**S2D, max_force_N=20.0))
     assert _penetration_mm(paired) > 0.3
+
+
+def test_the_cli_takes_the_pocket_contact_and_refuses_others_in_one_line():
+    import json
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    args = ["fe", "indent", "pocket2-sil", "--mode", "2d", "--mesh", "coarse", "--hold", "0",
+            "--threads", "1", "--json"]
+    d = {}
+    for kind in ("paired", "sliding"):
+        out = CliRunner().invoke(main, [*args, "--pocket-contact", kind])
+        assert out.exit_code == 0, out.output
+        d[kind] = json.loads(out.output)["displacement_at_2N_mm"]
+    assert d["sliding"] < d["paired"]
+    out = CliRunner().invoke(main, [*args, "--pocket-contact", "glued"])
+    assert out.exit_code == 2
+    line = [x for x in out.output.splitlines() if x.strip()]
+    assert len(line) == 1 and "--pocket-contact" in line[0] and "paired" in line[0]

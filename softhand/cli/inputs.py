@@ -196,6 +196,15 @@ _OPT_BODY = click.option(
          "a metacarpal; plate, sphere, cylinder at 0 or 90 deg; no embedded sensors).")
 
 
+_OPT_POCKET = click.option(
+    "--pocket-contact", "pocket_contact", type=click.Choice(["paired", "sliding"]),
+    default="paired", show_default=True,
+    help="The pocket's roof against its floor: paired (the shipped curves': points at the same "
+         "place on their faces; the floor passes into the roof once it slides, 0.12 mm on "
+         "pocket2-sil at 2 N) or sliding (the floor and side wall projected on the deformed "
+         "roof; reports/pocket-contact.md).")
+
+
 _OPT_ENGINE = click.option(
     "--engine", type=click.Choice(["compiled", "numpy"]), default="compiled", show_default=True,
     help="Element engine: compiled (numba kernels, one Cholesky analysis per run) or numpy (the "
@@ -258,7 +267,7 @@ def check_threads_or_cluster(threads: int | None, cluster: str | None,
 
 FE_OPTIONS = (_OPT_MESH, _OPT_MODE, _OPT_INDENTER, _OPT_BODY, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD,
               _OPT_SPEED, _OPT_FORCE, _OPT_DEPTH, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS,
-              _OPT_ENGINE, _OPT_SOLVER)
+              _OPT_ENGINE, _OPT_SOLVER, _OPT_POCKET)
 EXPORT_OPTIONS = (_OPT_MESH, _OPT_INDENTER, _OPT_ELASTIC, _OPT_MODULI, _OPT_HOLD, _OPT_SPEED,
                   _OPT_FORCE, _OPT_GEOMETRY, _OPT_MATERIALS, OPT_THREADS)
 
