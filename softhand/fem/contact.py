@@ -195,9 +195,10 @@ class PocketContact:
 
     Large sliding, node-to-surface at Gauss points, one pass: each Gauss point ``x_s`` of the
     floor and of the side wall (the slave faces) is projected on the current roof underside
-    (the master): ``x_m``, the closest point of all its quadratic faces (Gauss-Newton in each
-    face, held inside it; the pocket's roof has 9-30 faces, so no search window can miss
-    the face a point has slid onto). Its gap is ``g = (x_s - x_m) . n``, ``n`` the roof's unit
+    (the master): ``x_m``, the closest point of its quadratic faces that hold one of the two
+    roof nodes nearest ``x_s`` (Gauss-Newton in each, held inside it; a search by node follows
+    a point however far it slides, where a window of faces around the one it faced at rest
+    missed a 1.5 mm slide). Its gap is ``g = (x_s - x_m) . n``, ``n`` the roof's unit
     normal there pointing into the pocket (beyond a face's edge, the unit vector from ``x_m``
     to ``x_s``: the gap is then the distance, continuous across the edge). Linearised as
     `RoundGaps` is, ``G = n^T (N_s - N_m)`` with the projection held (the curvature terms
@@ -249,6 +250,16 @@ class PocketContact:
         self._slave_cols = np.repeat(
             (self.slave[:, :, None] * dim + np.arange(dim)).reshape(nf, -1), nq, axis=0)
         self.assigned: np.ndarray | None = None  # roof face per row of the last linearisation
+        # candidates: the roof faces of the two roof nodes nearest a point (a closest point
+        # lies on a face of a nearby node; the faces of each node, -1 padded)
+        self._roof_nodes = np.unique(roof)
+        where = {a: i for i, a in enumerate(self._roof_nodes.tolist())}
+        faces_of: list[list[int]] = [[] for _ in self._roof_nodes]
+        for f, row in enumerate(roof):
+            for a in set(row.tolist()):
+                faces_of[where[a]].append(f)
+        width = max(len(v) for v in faces_of)
+        self._node_faces = np.array([v + [-1] * (width - len(v)) for v in faces_of])
 
     @staticmethod
     def _shape(xi: np.ndarray):
@@ -282,8 +293,14 @@ class PocketContact:
         x = self.mesh.X + u.reshape(-1, dim)
         xs = np.einsum("qa,fad->fqd", self.N_s, x[self.slave])  # (nf, nq, dim)
         roof = self.mesh.roof_faces
-        C = len(roof)
-        xr = np.broadcast_to(x[roof][None, None], (nf, nq, C, *roof.shape[1:], dim))
+        xn = x[self._roof_nodes]
+        d2 = ((xs[:, :, None, :] - xn[None, None]) ** 2).sum(axis=-1)
+        near = np.argpartition(d2, 1, axis=-1)[..., :2]  # the two nearest roof nodes
+        cand = self._node_faces[near].reshape(nf, nq, -1)  # (nf, nq, C), -1 padded
+        valid = cand >= 0
+        cand = np.where(valid, cand, cand[..., :1])
+        C = cand.shape[-1]
+        xr = x[roof[cand]]  # (nf, nq, C, npf, dim)
         target = np.broadcast_to(xs[:, :, None, :], (nf, nq, C, dim))
         xi = np.zeros((nf, nq, C, dim - 1))
         for _ in range(8):  # Gauss-Newton on |x(xi) - x_s|^2, held inside the face
@@ -292,14 +309,15 @@ class PocketContact:
             H = np.einsum("...dj,...dk->...jk", t, t)
             xi = np.clip(xi - np.linalg.solve(H, g[..., None])[..., 0], -1.0, 1.0)
         p, t = self._surface(xr, xi)
-        best = np.argmin(np.linalg.norm(p - target, axis=-1), axis=-1)  # (nf, nq) roof face
+        dist = np.where(valid, np.linalg.norm(p - target, axis=-1), np.inf)
+        best = np.argmin(dist, axis=-1)  # (nf, nq) candidate
 
         def take(a: np.ndarray) -> np.ndarray:
             return np.take_along_axis(a, best.reshape(nf, nq, 1, *([1] * (a.ndim - 3))),
                                       axis=2)[:, :, 0]
 
         xi_b, p_b, t_b = take(xi), take(p), take(t)
-        face = best
+        face = np.take_along_axis(cand, best[..., None], axis=2)[..., 0]  # (nf, nq) roof face
         n = self._normal(t_b) * self.sign[face][..., None]
         v = xs - p_b
         length = np.linalg.norm(v, axis=-1, keepdims=True)
