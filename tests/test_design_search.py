@@ -19,8 +19,9 @@ from click.testing import CliRunner
 from conftest import interrupt_when, start_interruptible
 
 from softhand.cli import main
-from softhand.design.evaluate import evaluate, screen_settings
-from softhand.design.search import hypervolume, run_search
+from softhand.design.evaluate import SCREEN_CONTACT_POINTS, evaluate, screen_settings
+from softhand.design.outputs import fe_threads
+from softhand.design.search import hypervolume, run_search, study_contact_points
 from softhand.design.space import VARIABLES, Candidate, DesignSpace
 from softhand.design.stl import exact_volume_mm3, phalanx_mesh, write_stl
 from softhand.fem.geometry import PhalanxGeometry
@@ -36,6 +37,7 @@ from softhand.fem.solver import indent
 from softhand.fem.strain import peak_strains
 from softhand.laws.lifelike import distance_pct
 from softhand.paper import paper
+from softhand.parallel import available_cpus
 
 NAMES = list(library())
 SHEETS = [n for n in NAMES if library()[n].modulus_100_MPa is not None]
@@ -204,7 +206,8 @@ def test_three_trial_search_runs_and_resumes_the_same_study(tmp_path):
 
 
 def test_two_contact_points_screen_the_same_candidates_within_the_stated_tolerance(tmp_path):
-    """--contact-points 2 (issue 38, item 6: the faster FE, opt-in): the same seed draws the same
+    """--contact-points 2 (issue 38, item 6: the faster FE, the search's default) against 4 (the
+    FE's default, the shipped search's): the same seed draws the same
     3 candidates, whose lifelike distance moves by at most 0.5 percentage points (measured 0.34,
     coarse mesh) and durability usage by at most 5 %; the study keeps its choice, and a
     --resume with the other one is refused naming both."""
@@ -217,7 +220,29 @@ def test_two_contact_points_screen_the_same_candidates_within_the_stated_toleran
         assert b.values[0] == pytest.approx(a.values[0], abs=0.5)
         assert b.values[1] == pytest.approx(a.values[1], rel=0.05)
     with pytest.raises(ValueError, match=r"contact_points 2 \(the journal\) vs 4 \(this run\)"):
-        run_search(space, trials=4, out=tmp_path / "2", mesh="coarse", resume=True)
+        run_search(space, trials=4, out=tmp_path / "2", mesh="coarse", resume=True,
+                   contact_points=4)
+
+
+def test_a_new_study_screens_with_two_contact_points_and_a_resumed_one_keeps_its_own(tmp_path):
+    """Without --contact-points a new study takes `SCREEN_CONTACT_POINTS` (2) and a resumed one
+    its journal's number, so a study screened with 4 goes on with 4 (not refused, not mixed)."""
+    space = DesignSpace(materials=("dragon-skin-10",))
+    new = run_search(space, trials=1, out=tmp_path / "new", mesh="coarse").study
+    assert study_contact_points(new) == SCREEN_CONTACT_POINTS == 2
+    four = run_search(space, trials=1, out=tmp_path / "four", mesh="coarse", contact_points=4)
+    again = run_search(space, trials=2, out=tmp_path / "four", mesh="coarse", resume=True)
+    assert (again.done_before, again.ran) == (1, 1)
+    assert study_contact_points(again.study) == study_contact_points(four.study) == 4
+
+
+def test_the_3d_check_shares_the_machines_cpus_among_its_workers():
+    """One local worker's 3D check uses every CPU for its element kernels; N workers share
+    them; a cluster's workers run on their own machines (one thread each)."""
+    n = available_cpus()
+    assert fe_threads(1) == fe_threads(None) == n
+    assert fe_threads(n) == 1 and fe_threads(2 * n) == 1
+    assert fe_threads(1, cluster="tcp://127.0.0.1:8786") == 1
 
 
 def test_a_study_from_before_the_contact_points_choice_resumes_with_four(tmp_path):

@@ -170,3 +170,27 @@ def test_the_cli_takes_the_pocket_contact_and_refuses_others_in_one_line():
     assert out.exit_code == 2
     line = [x for x in out.output.splitlines() if x.strip()]
     assert len(line) == 1 and "--pocket-contact" in line[0] and "paired" in line[0]
+
+
+def test_the_cli_takes_the_contact_points_as_the_settings_do_and_refuses_others_in_one_line():
+    """`--contact-points` reaches `IndentationSettings.contact_points` (the design search's
+    winners' `fe_indent` lines name 2): the CLI's run is the Python run, bit for bit."""
+    import json
+    from dataclasses import replace
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+
+    args = ["fe", "indent", "pocket2-sil", "--mode", "2d", "--mesh", "coarse", "--hold", "0",
+            "--threads", "1", "--json"]
+    out = CliRunner().invoke(main, [*args, "--contact-points", "2"])
+    assert out.exit_code == 0, out.output
+    got = json.loads(out.output)["displacement_at_2N_mm"]
+    s = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, threads=1)
+    assert got == indent("pocket2-sil", replace(s, contact_points=2)).displacement_at(2.0)
+    assert got != indent("pocket2-sil", s).displacement_at(2.0)
+    out = CliRunner().invoke(main, [*args, "--contact-points", "7"])
+    assert out.exit_code == 2
+    line = [x for x in out.output.splitlines() if x.strip()]
+    assert len(line) == 1 and "--contact-points" in line[0] and "2<=x<=6" in line[0]

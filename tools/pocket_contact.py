@@ -55,7 +55,7 @@ def _designs() -> list[tuple[str, object, IndentationSettings]]:
     path = Path(REPORTS_DIR) / "design-search.json"
     if path.exists():
         for i, w in enumerate(json.loads(path.read_text(encoding="utf-8"))["winners"], 1):
-            design, s = fe_design(candidate_of(w), screen_settings())
+            design, s = fe_design(candidate_of(w), screen_settings(contact_points=4))
             out.append((f"winner {i} (trial {w['trial']})", design, s))
     return out
 

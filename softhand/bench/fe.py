@@ -3,10 +3,11 @@
 Measures, in one process on this machine:
 
 * the design search's two FE runs (`softhand.design.evaluate.screen_settings`): the 2D screen
-  and the 3D check of pocket2-sil to 2 N on CHOLMOD (the default install), as the search runs
-  them (one thread, 4 contact points per face direction) against the opt-in faster settings
-  (2 threads; 2 contact points), interleaved, each run in a fresh process, with the answers'
-  differences (indentation at 1 N and 2 N, force at 1 mm and 2 mm);
+  and the 3D check of pocket2-sil to 2 N on CHOLMOD (the default install), with the FE's 4
+  contact points per face direction on one thread (the shipped search's runs, the reference)
+  against 2 threads, 2 contact points (the search's since issue 38's item 6) and both,
+  interleaved, each run in a fresh process, with the answers' differences (indentation at 1 N
+  and 2 N, force at 1 mm and 2 mm);
 * the element engines side by side (``IndentationSettings.engine``): the NumPy reference
   (batched NumPy elements, SuperLU ordering and factorizing every tangent) against the compiled
   engine (numba kernels, the run's fixed pattern) on each sparse Cholesky installed here
@@ -100,6 +101,7 @@ def run_fe_benchmark(out_dir: str | Path = REPORTS_DIR, *, quick: bool = False,
     data: dict[str, Any] = {"machine": machine, "git_revision": machine["git_revision"]}
     data["engines"] = _engines(repeats=2 if quick else 3, say=say)
     data["screen"] = _screen(repeats=3, say=say)
+    data["screen"]["winners"] = _winner_checks(say)
     data["solver"] = resolve_solver("auto")  # the default runs below go to it
     say("one 3D design (pocket2-sil) to 2 N, ramp")
     one = indent("pocket2-sil", ramp)
@@ -218,11 +220,12 @@ def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
     return out
 
 
-#: The design search's runs against the opt-in faster settings: (key, keywords of
-#: `screen_settings`, label).
-_SCREEN_RUNS = (("search", {}, "as the search runs it (1 thread, 4 contact points)"),
-                ("threads2", {"threads": 2}, "2 threads"),
-                ("points2", {"contact_points": 2}, "2 contact points"),
+#: The design search's runs: (key, keywords of `screen_settings`, label); "search", the
+#: reference, is the FE's 4 contact points on one thread, the shipped search's runs.
+_SCREEN_RUNS = (("search", {"contact_points": 4},
+                 "4 contact points, 1 thread (the shipped search's runs)"),
+                ("threads2", {"contact_points": 4, "threads": 2}, "4 contact points, 2 threads"),
+                ("points2", {"contact_points": 2}, "2 contact points, 1 thread"),
                 ("points2_threads2", {"contact_points": 2, "threads": 2},
                  "2 contact points, 2 threads"))
 _SCREEN_MARKS = (("d1N_mm", "displacement_at_1N_mm"), ("d2N_mm", "displacement_at_2N_mm"),
@@ -262,16 +265,48 @@ def _screen(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
     return out
 
 
-def _fresh_screen_run(mode: str, given: dict[str, Any]) -> dict[str, Any]:
-    """One `screen_settings` run of pocket2-sil on CHOLMOD in a new Python process (its
-    summary), after a small run that loads the compiled kernels."""
+#: The 3D checks of the shipped search's winners: the shipped runs' settings against the search's
+#: now (2 contact points; 2 threads, as on one worker of 2 cores).
+_WINNER_RUNS = (("search", {"contact_points": 4}), ("points2_threads2",
+                                                      {"contact_points": 2, "threads": 2}))
+
+
+def _winner_checks(say: Callable[[str], None]) -> list[dict[str, Any]]:
+    """The 3D check of each winner of ``reports/design-search.json`` (soft designs: more steps
+    than pocket2-sil, near where their ramp stiffens), one fresh-process run per setting."""
+    path = Path(REPORTS_DIR) / "design-search.json"
+    if not path.exists():
+        return []
+    rows = []
+    for i, w in enumerate(json.loads(path.read_text(encoding="utf-8"))["winners"], 1):
+        row: dict[str, Any] = {"winner": i, "trial": w["trial"], "label": w["label"]}
+        for key, given in _WINNER_RUNS:
+            say(f"3D check of winner {i} (trial {w['trial']}): {given}")
+            r = _fresh_screen_run("3d", given, trial=w)
+            row[key] = {k: r[k] for k in ("wall_s", "newton_iterations", "n_steps",
+                                          "displacement_at_1N_mm", "displacement_at_2N_mm")}
+        rows.append(row)
+    return rows
+
+
+def _fresh_screen_run(mode: str, given: dict[str, Any],
+                      trial: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One `screen_settings` run of pocket2-sil (or of a search's ``trial`` row) on CHOLMOD in a
+    new Python process (its summary), after a small run that loads the compiled kernels."""
     kw = ", ".join(f"{k}={v!r}" for k, v in given.items())
+    setup, design = "", "'pocket2-sil'"
+    if trial is not None:
+        row = {"candidate": trial["candidate"]}
+        setup = ("from softhand.design.evaluate import fe_design\n"
+                 "from softhand.design.search import candidate_of\n"
+                 f"d, s = fe_design(candidate_of({row!r}), s)\n")
+        design = "d"
     code = ("import dataclasses, json, sys\n"
             "from softhand.design.evaluate import screen_settings\n"
             "from softhand.fem.solver import indent\n"
             f"s = dataclasses.replace(screen_settings(mode={mode!r}, {kw}), solver='cholmod')\n"
             "indent('solid-sil', dataclasses.replace(s, mesh='coarse'))\n"
-            "r = indent('pocket2-sil', s)\n"
+            f"{setup}r = indent({design}, s)\n"
             "json.dump({**r.summary(), 'force_at_1mm_N': r.force_at(1.0)}, sys.stdout)\n")
     return _python_json(code, f"the {mode} screen run {given}")
 
@@ -290,9 +325,11 @@ def _screen_lines(d: dict[str, Any]) -> list[str]:
     if not e:
         return []
     lines = [f"The design search's runs of {e['design']} to 2 N on {e['solver'].upper()} (the "
-             "default install; `softhand.design.evaluate.screen_settings`), as the search runs "
-             "them and with the opt-in faster settings, interleaved, each in a fresh process, "
-             "median wall; the answers' differences from the search's run:", "",
+             "default install; `softhand.design.evaluate.screen_settings`), interleaved, each "
+             "in a fresh process, median wall; the answers' differences from the first row's "
+             "run. The search screens in 2D with 2 contact points, one thread per worker, and "
+             "checks in 3D with 2 contact points on this machine's CPUs shared among its "
+             "workers (2 threads on one worker of 2 cores; studies from before keep 4):", "",
              "| run | settings | wall (s) | speed-up | Newton iterations | d(1 N) | d(2 N) "
              "| F(1 mm) | F(2 mm) |", "|---|---|---|---|---|---|---|---|---|"]
 
@@ -306,6 +343,21 @@ def _screen_lines(d: dict[str, Any]) -> list[str]:
                          f"{r['speedup']:.2f}x | {r['newton_iterations']} | "
                          + " | ".join("reference" if key == "search" else pct(dp[m])
                                       for m, _ in _SCREEN_MARKS) + " |")
+    if e.get("winners"):
+        lines += ["", "The 3D checks of the shipped search's winners (reports/design-search.json; "
+                  "soft designs, whose ramps stiffen late and take more steps), one fresh-process "
+                  "run per setting:", "",
+                  "| winner | design | 4 points, 1 thread: wall (s) | iterations | 2 points, "
+                  "2 threads: wall (s) | iterations | speed-up | d(1 N) | d(2 N) |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for w in e["winners"]:
+            a, b = w["search"], w["points2_threads2"]
+            lines.append(
+                f"| {w['winner']} (trial {w['trial']}) | {w['label']} | {a['wall_s']:.2f} | "
+                f"{a['newton_iterations']} | {b['wall_s']:.2f} | {b['newton_iterations']} | "
+                f"{a['wall_s'] / b['wall_s']:.2f}x | "
+                + " | ".join(pct(_pct(b[f], a[f])) for f in
+                             ("displacement_at_1N_mm", "displacement_at_2N_mm")) + " |")
     return lines
 
 

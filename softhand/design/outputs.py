@@ -25,13 +25,18 @@ from typing import Any
 import numpy as np
 
 from softhand.design.evaluate import evaluate, fe_indent_command, fe_materials, screen_settings
-from softhand.design.search import candidate_of, completed, pareto_evaluations
+from softhand.design.search import (
+    candidate_of,
+    completed,
+    pareto_evaluations,
+    study_contact_points,
+)
 from softhand.design.space import Candidate
 from softhand.design.stl import write_stl
 from softhand.io import atomic_open, atomic_write_json, atomic_write_text
-from softhand.parallel import run_tasks
+from softhand.parallel import available_cpus, run_tasks
 
-__all__ = ["BASELINE", "check_in_3d", "choose_winners", "plot_curves", "plot_front",
+__all__ = ["BASELINE", "check_in_3d", "choose_winners", "fe_threads", "plot_curves", "plot_front",
            "write_outputs"]
 
 #: the paper's most lifelike design (pocket2-sil, Table 3's SIL, the default geometry)
@@ -51,17 +56,29 @@ def choose_winners(front: list[dict[str, Any]], k: int, *, below: float | None =
     return [pool[i] for i in idx]
 
 
+def fe_threads(workers: int | None, cluster: str | None = None) -> int:
+    """Threads of each 3D check's element kernels: this machine's CPUs shared among its
+    ``workers`` local processes (one on a cluster, whose workers have their own machines)."""
+    if cluster is not None:
+        return 1
+    return max(1, available_cpus() // max(1, workers or 1))
+
+
 def _delta(a: float | None, b: float | None) -> float | None:
     return None if a is None or b is None else b - a
 
 
 def check_in_3d(rows: list[dict[str, Any]], *, mesh: str = "default", max_force_N: float = 2.0,
                 threads: int | None = 1, cluster: str | None = None,
-                contact_points: int = 4) -> dict[str, Any]:
+                contact_points: int | None = None) -> dict[str, Any]:
     """The 3D quarter model of each row's candidate and of `BASELINE` (2D and 3D), with the
-    differences 3D - 2D of each objective and of the indentation at 2 N."""
+    differences 3D - 2D of each objective and of the indentation at 2 N.
+
+    ``threads`` local worker processes run the designs; each 3D run's element kernels take this
+    machine's CPUs shared among them (`fe_threads`), so that one worker's check uses them all.
+    """
     s3 = screen_settings(mode="3d", mesh=mesh, max_force_N=max_force_N,
-                         contact_points=contact_points)
+                         contact_points=contact_points, threads=fe_threads(threads, cluster))
     s2 = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
                          contact_points=contact_points)
     tasks = [(f"trial-{r['trial']}", (candidate_of(r), s3)) for r in rows]
@@ -212,10 +229,13 @@ def table_markdown(data: dict[str, Any]) -> str:
 def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "default",
                   max_force_N: float = 2.0, threads: int | None = 1,
                   cluster: str | None = None, extra: dict[str, Any] | None = None,
-                  contact_points: int = 4) -> dict[str, Any]:
+                  contact_points: int | None = None) -> dict[str, Any]:
     """The 3D check of up to ``check`` winners, then ``designs.{json,md}``, ``pareto.png`` and
-    the STLs into ``out`` (each file written whole)."""
+    the STLs into ``out`` (each file written whole). ``contact_points``: None, the study's own
+    (`study_contact_points`)."""
     out = Path(out)
+    if contact_points is None:
+        contact_points = study_contact_points(study)
     trials = completed(study)
     front = pareto_evaluations(study)
     base_2d = evaluate(BASELINE, screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
@@ -229,7 +249,7 @@ def write_outputs(study, out: str | Path, *, check: int = 3, mesh: str = "defaul
         w["stl"] = write_stl(cand.geometry(), out / "stl" / f"{i}-trial{w['trial']}.stl")
         mats = out / "stl" / f"{i}-trial{w['trial']}-materials.json"
         atomic_write_json(mats, fe_materials(cand))
-        w["fe_indent"] = fe_indent_command(cand, str(mats))
+        w["fe_indent"] = fe_indent_command(cand, str(mats), contact_points=contact_points)
     data = {**(extra or {}), "n_trials_complete": len(trials), "front": front,
             "winners": checked["winners"], "baseline": checked["baseline"],
             "check_interrupted": checked["interrupted"]}

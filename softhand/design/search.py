@@ -30,13 +30,19 @@ from typing import Any
 
 import numpy as np
 
-from softhand.design.evaluate import OBJECTIVES, Evaluation, evaluate, screen_settings
+from softhand.design.evaluate import (
+    OBJECTIVES,
+    SCREEN_CONTACT_POINTS,
+    Evaluation,
+    evaluate,
+    screen_settings,
+)
 from softhand.design.space import VARIABLES, Candidate, DesignSpace
 from softhand.fem.library import library
 from softhand.parallel import run_tasks
 
 __all__ = ["SAMPLERS", "SearchOutcome", "compare_samplers", "hypervolume", "make_sampler",
-           "open_study", "pareto_evaluations", "run_search"]
+           "open_study", "pareto_evaluations", "run_search", "study_contact_points"]
 
 SAMPLERS = ("tpe", "nsga2")
 STUDY = "design-search"
@@ -68,8 +74,11 @@ def _config(space: DesignSpace, mesh: str, max_force_N: float,
 
 def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
                seed: int | None = 0, resume: bool = False, mesh: str = "default",
-               max_force_N: float = 2.0, contact_points: int = _CONTACT_POINTS_BEFORE):
+               max_force_N: float = 2.0, contact_points: int | None = None):
     """The study in ``out/journal.log``: new, or (``resume``) the one there.
+
+    ``contact_points`` (`screen_settings`): None is `SCREEN_CONTACT_POINTS` for a new study and
+    the journal's own number for a resumed one (4 for a journal from before the choice).
 
     Raises:
         ValueError: a journal exists without ``resume``; ``resume`` without a journal; or a
@@ -90,7 +99,6 @@ def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
     Path(out).mkdir(parents=True, exist_ok=True)
     storage = JournalStorage(JournalFileBackend(str(path)))
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    config = _config(space, mesh, max_force_N, contact_points)
     study = optuna.create_study(study_name=STUDY, storage=storage, load_if_exists=resume,
                                 directions=["minimize"] * len(OBJECTIVES),
                                 sampler=make_sampler(sampler, seed))
@@ -99,6 +107,9 @@ def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
     old = study.user_attrs.get("config")
     if old is not None and "contact_points" not in old:  # a study from before the choice
         old = {**old, "contact_points": _CONTACT_POINTS_BEFORE}
+    if contact_points is None:
+        contact_points = SCREEN_CONTACT_POINTS if old is None else old["contact_points"]
+    config = _config(space, mesh, max_force_N, contact_points)
     if old is None:
         study.set_user_attr("config", config)
         study.set_user_attr("sampler", sampler)
@@ -107,6 +118,11 @@ def open_study(out: str | Path, space: DesignSpace, *, sampler: str = "tpe",
                 for k in config if old.get(k) != config[k]]
         raise ValueError(f"--resume: {path} is a study of other settings ({'; '.join(diff)})")
     return study
+
+
+def study_contact_points(study) -> int:
+    """The contact points per face direction the study's runs use (`open_study`)."""
+    return int(study.user_attrs["config"].get("contact_points", _CONTACT_POINTS_BEFORE))
 
 
 def _counted(study) -> int:
@@ -169,13 +185,15 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
                sampler: str = "tpe", resume: bool = False, mesh: str = "default",
                max_force_N: float = 2.0, threads: int | None = 1, cluster: str | None = None,
                progress: Callable[[int, int], None] | None = None,
-               contact_points: int = 4) -> SearchOutcome:
+               contact_points: int | None = None) -> SearchOutcome:
     """Run (or continue) the 2D screen until ``trials`` trials have finished.
 
     Args:
         trials: total finished trials wanted in the study (a resume counts those in the journal).
         contact_points: the FE's contact points per face direction in every run
-            (`screen_settings`): 4, the shipped runs' answers, or 2, about twice as fast.
+            (`screen_settings`): 2 (`SCREEN_CONTACT_POINTS`), or 4, the FE's default and the
+            shipped search's (about half as fast); None: 2 for a new study, the journal's own
+            for a resumed one.
         threads: local worker processes (1: this process, one trial at a time; N: batches of
             4 N trials, the sampler asked for all of a batch before it runs); not with
             ``cluster``.
@@ -204,7 +222,7 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
     if progress:
         progress(before, trials)
     settings = screen_settings(mode="2d", mesh=mesh, max_force_N=max_force_N,
-                               contact_points=contact_points)
+                               contact_points=study_contact_points(study))
     workers = 1 if cluster is not None else max(1, threads or 1)
     # local workers start with each batch (parallel.run_tasks): batches of 4 per worker amortise
     # that; the cluster's workers stay up, 8 at a time keep them busy
@@ -291,7 +309,8 @@ def hypervolume(points: np.ndarray, reference: tuple[float, float]) -> float:
 
 def compare_samplers(space: DesignSpace, *, trials: int, seeds: tuple[int, ...], out: str | Path,
                      mesh: str = "default", reference: tuple[float, float] = (60.0, 0.2),
-                     progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                     progress: Callable[[str], None] | None = None,
+                     contact_points: int = SCREEN_CONTACT_POINTS) -> dict[str, Any]:
     """Run each sampler for ``trials`` trials per seed; the hypervolume of each front.
 
     Returns:
@@ -302,6 +321,7 @@ def compare_samplers(space: DesignSpace, *, trials: int, seeds: tuple[int, ...],
 
     result: dict[str, Any] = {"trials": trials, "seeds": list(seeds), "mesh": mesh,
                               "reference": list(reference), "objectives": list(OBJECTIVES),
+                              "contact_points": contact_points,
                               "space": asdict(space), "samplers": {}}
     for name in SAMPLERS:
         row: dict[str, Any] = {"hypervolume": [], "best_lifelike_pct": [], "wall_s": []}
@@ -309,7 +329,7 @@ def compare_samplers(space: DesignSpace, *, trials: int, seeds: tuple[int, ...],
             t0 = time.perf_counter()
             folder = Path(out) / f"{name}-seed{seed}"
             s = run_search(space, trials=trials, out=folder, seed=seed, sampler=name, mesh=mesh,
-                           resume=(folder / JOURNAL).exists())
+                           resume=(folder / JOURNAL).exists(), contact_points=contact_points)
             pts = np.array([t.values for t in s.study.best_trials])
             row["hypervolume"].append(hypervolume(pts, reference))
             row["best_lifelike_pct"].append(float(pts[:, 0].min()) if len(pts) else None)
