@@ -220,6 +220,9 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                f"| bone on bone (peak {acc['bone_on_bone_peak_N']:.1f} N) | "
                f"{share['bone_on_bone']:.1f} % |\n"
                f"| no law | {share['no_law']:.1f} % |")
+    geo = acc.get("by_geometry")
+    if geo:
+        click.echo(_geometry_table(geo))
     over = summary["overload"]
     first = (f"first at t = {over['first_overload_time_s']:.2f} s: " + ", ".join(
         f"{k} {v:.1f} N" for k, v in over["first_overload"].items())
@@ -493,3 +496,21 @@ def _arms(hand: str, press_N: float | None, stiffness: float | None) -> dict:
     if press_N is not None:
         out["partner_arm"] = ArmConfig.of("active", press_n=press_N)
     return out
+
+
+def _geometry_table(geo: dict, rows: int = 6) -> str:
+    """The force through each local geometry and whether its law was made for it
+    (`softhand.skin.local_geometry.geometry_accounting`): the largest ``rows`` classes."""
+    lines = [f"\nthe law against the shapes each contact met (softhand.skin.local_geometry): a "
+             f"skin law made for the contact's geometry carried "
+             f"{geo['skin_own_class_share_pct']:.1f} % of the force, a tissue law "
+             f"{geo['tissue_own_class_share_pct']:.1f} %, both {geo['own_class_share_pct']:.1f} "
+             "%\n| what presses the skin, where | share | skin law | made for it |\n"
+             "|---|---|---|---|"]
+    for c in geo["classes"][:rows]:
+        lines.append(f"| {c['contact']} | {c['share_pct']:.1f} % | {c['law']} | "
+                     f"{'yes' if c['skin_fits'] else 'no'} |")
+    rest = sum(c["share_pct"] for c in geo["classes"][rows:])
+    if rest > 0:
+        lines.append(f"| {len(geo['classes']) - rows} other classes | {rest:.1f} % | | |")
+    return "\n".join(lines)

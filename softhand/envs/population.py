@@ -242,7 +242,7 @@ def run_population(partners: list[Partner], settings: dict, *, nthread: int = 1
                            fr["ph"], share, 0, e.model, np.array(fr["a"]),
                            accounting=np.array(fr["acc"]), sensor_reading_N=np.array(fr["s"]),
                            partner_grip_N=np.array(fr["g"]), law_labels=tuple(law_labels(e)),
-                           contact_laws=e.contact_laws)
+                           contact_laws=e.contact_laws, geometry_N=dict(areas[w].geometry))
         table = run.table()
         results.append({"partner": p.to_dict(),
                         "peak_N": {r: v["peak_N"] for r, v in table.items()},

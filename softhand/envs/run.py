@@ -20,6 +20,12 @@ from softhand.hands.config import HandConfig
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paper import paper
 from softhand.sensors.device import ASSUMPTIONS
+from softhand.skin.local_geometry import (
+    LocalGeometry,
+    contact_class,
+    crossing_bin,
+    geometry_accounting,
+)
 from softhand.validate import show
 
 __all__ = ["ACCOUNT_CLASSES", "ContactAreas", "HandshakeRun", "check_policy",
@@ -93,6 +99,9 @@ class HandshakeRun:
     first_overload: dict = field(default_factory=dict)
     #: per frame: the force resisted twice at a skin seam (N, ContactAreas.double_N)
     double_count_N: np.ndarray | None = None
+    #: the law-carrying contacts' normal force (N) summed over the recorded frames, by law and
+    #: local geometry on each side (ContactAreas.geometry; force_accounting's ``by_geometry``)
+    geometry_N: dict | None = None
 
     def double_count(self) -> dict[str, float]:
         """The force counted twice at skin seams (ContactAreas.double_N) while the hands hold
@@ -193,7 +202,10 @@ class HandshakeRun:
         share of the pair force. ``by_law_Ns`` / ``by_law_share_pct``: the pair force by the law
         each pair carried (its contact class, ``plate``, a fallback to the plate law, ``tissue``
         or ``plate pad``; `softhand.envs.skins.PairChoice`); ``contact_laws``: how the
-        laws were chosen.
+        laws were chosen. ``by_geometry`` (where the run classified its contacts): the pair
+        force by the local geometry each contact met against the law it carried, and the shares
+        whose skin law, tissue law and both were made for that geometry
+        (`softhand.skin.local_geometry.geometry_accounting`).
         """
         n = len(ACCOUNT_CLASSES)
         acc = self.accounting if self.accounting is not None else np.zeros((1, n + 3))
@@ -223,6 +235,8 @@ class HandshakeRun:
         unsensed = float(np.maximum(pair - sensed[:pair.size], 0.0).sum() * dt)
         out["unsensed_skin_Ns"] = unsensed
         out["unsensed_share_pct"] = 100.0 * unsensed / max(float(pair.sum() * dt), 1e-12)
+        if self.geometry_N is not None:
+            out["by_geometry"] = geometry_accounting(self.geometry_N, self.law_labels, dt)
         return out
 
     def kinematics(self) -> dict:
@@ -516,10 +530,18 @@ class ContactAreas:
         #: contacts' forces (one indentation carried by two laws)
         self.double_N = 0.0
         self._force = np.zeros(6)
+        #: the law-carrying contacts' normal force (N) summed over the calls that classify
+        #: (``geometry=True``), by (law index, the skin's body, its counterpart, their crossing
+        #: bin, the tissue's body, its counterpart, their crossing bin):
+        #: `softhand.skin.local_geometry`
+        self.geometry: dict[tuple, float] = {}
+        self._local = LocalGeometry(model)
 
-    def __call__(self, data: mujoco.MjData) -> tuple[np.ndarray, float, np.ndarray]:
+    def __call__(self, data: mujoco.MjData, *, geometry: bool = True
+                 ) -> tuple[np.ndarray, float, np.ndarray]:
         """Area per region (mm^2), bone-on-bone force (N), and per active contact a row of
-        position xyz (m), normal xyz and normal force (N), as the recording takes them."""
+        position xyz (m), normal xyz and normal force (N), as the recording takes them; with
+        ``geometry``, each law-carrying contact's local geometry is added to `geometry`."""
         area = np.zeros(self.n_regions)
         rigid = 0.0
         rows = []
@@ -546,6 +568,8 @@ class ContactAreas:
                     seam.setdefault(other, []).append((skin, c.pos.copy(), f))
                 if law is not None and len(law) > 2:
                     acc[n + 3 + law[2]] += f
+                    if geometry:
+                        self._classify(data, c, law[2], f)
                 if law is not None and law[0] == 0 and max(self.pad_joint[g1],
                                                            self.pad_joint[g2]) >= 0:
                     share = self._pad_share(data, c)
@@ -584,6 +608,19 @@ class ContactAreas:
                         double += min(fa, fb)
         self.double_N = double
         return area, rigid, np.asarray(rows, dtype=float).reshape(-1, 7)
+
+    def _classify(self, data: mujoco.MjData, c, law: int, f: float) -> None:
+        """Add a law-carrying contact's force to `geometry` under its local geometry."""
+        skin, other = (c.geom1, c.geom2) if self.hand[c.geom1] == 0 else (c.geom2, c.geom1)
+        # each geom's shape where its own surface is (the contact point is their midpoint; the
+        # normal points from geom1 into geom2, so geom1's surface lies half the depth along it)
+        half = 0.5 * max(-float(c.dist), 0.0) * c.frame[:3]
+        at = {c.geom1: c.pos + half, c.geom2: c.pos - half}
+        a, b = self._local.shape(data, skin, at[skin]), self._local.shape(data, other, at[other])
+        body, cp, x = contact_class(a, b)
+        t_body, t_cp, tx = contact_class(b, a)
+        key = (law, body, cp, crossing_bin(x), t_body, t_cp, crossing_bin(tx))
+        self.geometry[key] = self.geometry.get(key, 0.0) + f
 
     def _pad_share(self, data: mujoco.MjData, c) -> float:
         """The share of a contact's normal force that pushes its pad geom along the pad's axis
@@ -766,7 +803,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
             if has_pads:  # the pads' force at this frame's state (mj_step leaves the forces
                 # of the state it started from), so that compression and force go together
                 mujoco.mj_forward(m, d)
-                areas(d)
+                areas(d, geometry=False)
             frames["sf"].append(areas.skin_force.copy())
             frames["pf"].append(-d.qfrc_passive[pad_dofs])  # the pad's push on its skin
         if term or trunc:
@@ -799,4 +836,4 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
                          "softhand_version": __version__},
                         tuple(law_labels(base)), base.contact_laws, first,
                         np.array(frames["dp"]), frames["dn"], first_overload,
-                        np.array(frames["dc"]))
+                        np.array(frames["dc"]), dict(areas.geometry))

@@ -1,0 +1,273 @@
+"""The local geometry of a contact, read from its two geoms at the contact point, not from names.
+
+A pair's law is chosen once, from its two geoms' types (`softhand.skin.contact_classes.classify`:
+a round skin geom is a phalanx, a mesh a palm; a round counterpart up to
+`FINGER_MAX_RADIUS_MM` presses like a finger, anything else like a flat). Where a contact lies
+decides what it really is: a finger on a convex palm mesh presses its flat palmar face or the
+rounded border between that face and the back, and two capsules cross at any angle, while the
+FE's finger classes are a cylinder across the phalanx (90 deg). So each contact is classified by
+the shapes at its point (issue 36):
+
+* a capsule or cylinder: ``round``, its radius and its axis; a sphere: ``round`` without an axis;
+  an ellipsoid: ``round`` with its smallest semi-axis and the axis of its largest;
+* a mesh (MuJoCo collides a mesh as its convex hull, so the hull is what presses): ``face`` where
+  the normals of the hull's faces near the point agree within `FACE_DEG` (a flat patch: the faces
+  within `WINDOW_MM` of the point, and the face the point lies under), else
+  ``border``: a rounded edge, its radius estimated as the arc of 2 x `WINDOW_MM` over the
+  normals' spread and its axis the edge's direction (the cross product of the two normals that
+  differ most), read at the centre of the point's `CELL_MM` cube of the geom's frame (once per
+  cube: a contact moves little between frames). The audit that filed issue 36 used the same test
+  (normals within 6 mm agreeing within 15 deg);
+* a box or a plane: ``face``.
+
+`contact_class` names the class of a law's body pressed by its counterpart, with the crossing
+angle of two axes (0 deg: parallel, 90: across). `law_fits` says whether a law was made for that
+class: the law's body and counterpart must be the contact's, and a finger law (the FE's cylinder
+at 90 deg) counts within `CROSSING_TOLERANCE_DEG` of 90 deg, a named tolerance until there are FE
+curves per crossing angle. A rounded border has no law of its own yet: no law fits it.
+
+Units: MuJoCo's (m) in, mm and deg out.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, tissue_counterpart
+
+__all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "WINDOW_MM", "LocalGeometry",
+           "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
+           "law_classes", "law_fits"]
+
+#: the neighbourhood of a contact point whose hull faces decide face or border (mm)
+WINDOW_MM = 6.0
+#: largest angle between those faces' normals of a flat face (deg)
+FACE_DEG = 15.0
+#: a finger law (the FE's cylinder across the phalanx, 90 deg) counts for crossings within this
+#: of 90 deg (deg)
+CROSSING_TOLERANCE_DEG = 15.0
+#: the crossing angle's bins in the accounting (deg)
+CROSSING_BIN_DEG = 15.0
+#: a mesh's shape is read at the centre of the point's cube of this edge in the geom's frame and
+#: kept for that cube (mm): a sixth of `WINDOW_MM`
+CELL_MM = 1.0
+
+_CAPSULE = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+_CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+_SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+_ELLIPSOID = int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
+_MESH = int(mujoco.mjtGeom.mjGEOM_MESH)
+
+
+class LocalShape(NamedTuple):
+    """A geom's shape at a contact point.
+
+    Attributes:
+        kind: ``round``, ``face`` or ``border`` (module docstring).
+        radius_mm: a round geom's or a border's radius (None for a face).
+        axis: unit axis in the world (a capsule's, a border's edge), or None.
+    """
+
+    kind: str
+    radius_mm: float | None
+    axis: np.ndarray | None
+
+
+class _Hull:
+    """A mesh geom's faces in its own frame: vertices, triangles, outward unit normals and plane
+    offsets (n . x = offset on the face)."""
+
+    def __init__(self, model: mujoco.MjModel, geom: int) -> None:
+        mesh = int(model.geom_dataid[geom])
+        v0, nv = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+        f0, nf = int(model.mesh_faceadr[mesh]), int(model.mesh_facenum[mesh])
+        self.vert = np.array(model.mesh_vert[v0:v0 + nv], dtype=float)
+        self.face = np.array(model.mesh_face[f0:f0 + nf], dtype=int)
+        a, b, c = (self.vert[self.face[:, i]] for i in range(3))
+        n = np.cross(b - a, c - a)
+        keep = np.linalg.norm(n, axis=1) > 1e-18
+        self.face, n, a = self.face[keep], n[keep], a[keep]
+        n /= np.linalg.norm(n, axis=1)[:, None]
+        centre = self.vert.mean(axis=0)
+        n *= np.where(np.einsum("ij,ij->i", n, a - centre) < 0.0, -1.0, 1.0)[:, None]
+        self.normal = n
+        self.offset = np.einsum("ij,ij->i", n, a)
+        tri = np.stack([self.vert[self.face[:, i]] for i in range(3)], axis=1)  # (F, 3, 3)
+        self._tri = tri
+        self._edges = np.roll(tri, -1, axis=1) - tri
+        self._inward = np.cross(self.normal[:, None, :], self._edges)
+        self._edge2 = np.maximum((self._edges ** 2).sum(axis=2), 1e-30)
+        self._centroid = tri.mean(axis=1)
+        self._reach = np.linalg.norm(tri - self._centroid[:, None, :], axis=2).max(axis=1)
+
+    def shape_at(self, p: np.ndarray) -> tuple[str, float | None, np.ndarray | None]:
+        """(kind, radius mm, axis in the geom's frame) at ``p`` (the geom's frame, m)."""
+        under = int(np.argmax(self.normal @ p - self.offset))  # the face it lies under
+        normals = self.normal[np.union1d(self.within(p, 1e-3 * WINDOW_MM), [under])]
+        dots = np.clip(normals @ normals.T, -1.0, 1.0)
+        i, j = np.unravel_index(int(np.argmin(dots)), dots.shape)
+        spread = float(np.arccos(dots[i, j]))
+        if np.degrees(spread) <= FACE_DEG:
+            return "face", None, None
+        edge = np.cross(normals[i], normals[j])
+        return "border", 2.0 * WINDOW_MM / spread, edge / np.linalg.norm(edge)
+
+    def within(self, p: np.ndarray, radius: float) -> np.ndarray:
+        """The faces (indices) within ``radius`` (m) of ``p`` (the geom's frame)."""
+        cand = np.flatnonzero(np.linalg.norm(self._centroid - p, axis=1)
+                              <= radius + self._reach)
+        tri, edges = self._tri[cand], self._edges[cand]
+        rel = p - tri
+        # inside the triangle's prism: the distance to its plane; outside: to its nearest edge
+        inside = ((self._inward[cand] * rel).sum(axis=2) >= 0.0).all(axis=1)
+        plane = np.abs(self.normal[cand] @ p - self.offset[cand])
+        t = np.clip((rel * edges).sum(axis=2) / self._edge2[cand], 0.0, 1.0)
+        seg = np.linalg.norm(rel - t[..., None] * edges, axis=2).min(axis=1)
+        return cand[np.where(inside, plane, seg) <= radius]
+
+
+class LocalGeometry:
+    """`LocalShape` of any geom of ``model`` at a point (the meshes' hulls read once)."""
+
+    def __init__(self, model: mujoco.MjModel) -> None:
+        self.model = model
+        self._hulls: dict[int, _Hull] = {}
+        self._cells: dict[tuple, tuple] = {}
+
+    def shape(self, data: mujoco.MjData, geom: int, point) -> LocalShape:
+        """The shape of ``geom`` at ``point`` (world, m), e.g. a contact's ``pos``."""
+        m = self.model
+        kind = int(m.geom_type[geom])
+        R = data.geom_xmat[geom].reshape(3, 3)
+        if kind in (_CAPSULE, _CYLINDER):
+            return LocalShape("round", 1e3 * float(m.geom_size[geom][0]), R[:, 2].copy())
+        if kind == _SPHERE:
+            return LocalShape("round", 1e3 * float(m.geom_size[geom][0]), None)
+        if kind == _ELLIPSOID:
+            size = m.geom_size[geom][:3]
+            return LocalShape("round", 1e3 * float(size.min()), R[:, int(np.argmax(size))].copy())
+        if kind != _MESH:
+            return LocalShape("face", None, None)
+        # the shape at the centre of the point's CELL_MM cell of the geom's frame, kept per
+        # cell: a contact moves little between frames, and the answer depends on the cell alone
+        cell = np.round((R.T @ (np.asarray(point, dtype=float) - data.geom_xpos[geom]))
+                        / (1e-3 * CELL_MM)).astype(np.int64)
+        key = (geom, *cell.tolist())
+        found = self._cells.get(key)
+        if found is None:
+            hull = self._hulls.get(geom)
+            if hull is None:
+                hull = self._hulls[geom] = _Hull(m, geom)
+            found = self._cells[key] = hull.shape_at(cell * (1e-3 * CELL_MM))
+        kind, radius, axis = found
+        return LocalShape(kind, radius, None if axis is None else R @ axis)
+
+
+def crossing_deg(a: LocalShape, b: LocalShape) -> float | None:
+    """The angle between two shapes' axes, 0 (parallel) to 90 deg (across); None without both."""
+    if a.axis is None or b.axis is None:
+        return None
+    return float(np.degrees(np.arccos(min(1.0, abs(float(a.axis @ b.axis))))))
+
+
+def _body(s: LocalShape) -> str:
+    return "phalanx" if s.kind == "round" else "palm face" if s.kind == "face" else "palm border"
+
+
+def _counterpart(s: LocalShape) -> str:
+    if s.kind == "round":
+        return "finger" if s.radius_mm <= FINGER_MAX_RADIUS_MM else "flat"
+    return "flat" if s.kind == "face" else "border"
+
+
+def contact_class(body: LocalShape, counterpart: LocalShape) -> tuple[str, str, float | None]:
+    """(body, counterpart, crossing) of a law's body pressed by ``counterpart``: body
+    ``phalanx``, ``palm face`` or ``palm border``; counterpart ``finger``, ``flat`` or
+    ``border``; the crossing angle (deg) where both have an axis."""
+    return _body(body), _counterpart(counterpart), crossing_deg(body, counterpart)
+
+
+def law_classes(label: str) -> tuple[str, str]:
+    """The classes (`softhand.skin.contact_classes.CLASSES`) of the skin's law and of the
+    tissue's law in a pair that carries ``label`` (`softhand.envs.skins.PairChoice.law`): a
+    class law and the tissue's law for what the skin's body presses it with; the plate law
+    (``plate``, ``plate (no ... law)``, ``plate pad``) and the tissue's plate law; ``tissue``
+    (a rigid region): the tissue's plate law on both sides of the account."""
+    if label.startswith("phalanx/") or label.startswith("palm/"):
+        return label, f"phalanx/{tissue_counterpart(label)}"
+    return "phalanx/flat", "phalanx/flat"
+
+
+def law_fits(law: str, body: str, counterpart: str, crossing: float | None) -> bool:
+    """Whether a law of class ``law`` (``phalanx/finger``...) was made for a contact of
+    `contact_class` (body, counterpart, crossing): the same body (``palm`` is a palm face) and
+    counterpart, and a finger on a phalanx within `CROSSING_TOLERANCE_DEG` of 90 deg."""
+    law_body, law_counterpart = law.split("/")
+    if body != ("phalanx" if law_body == "phalanx" else "palm face"):
+        return False
+    if counterpart != law_counterpart:
+        return False
+    if law == "phalanx/finger" and crossing is not None:
+        return crossing >= 90.0 - CROSSING_TOLERANCE_DEG
+    return True
+
+
+def crossing_bin(crossing: float | None) -> int:
+    """The `CROSSING_BIN_DEG` bin of a crossing angle (0: 0-15 deg, ...), -1 for none."""
+    if crossing is None:
+        return -1
+    return min(int(crossing // CROSSING_BIN_DEG), round(90.0 / CROSSING_BIN_DEG) - 1)
+
+
+def _bin_text(b: int) -> str:
+    return "" if b < 0 else f" {b * CROSSING_BIN_DEG:g}-{(b + 1) * CROSSING_BIN_DEG:g} deg"
+
+
+def _fits(law: str, body: str, counterpart: str, b: int) -> bool:
+    # a bin fits where its lower edge does (CROSSING_TOLERANCE_DEG is a multiple of the bin)
+    return law_fits(law, body, counterpart, None if b < 0 else b * CROSSING_BIN_DEG)
+
+
+def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list[str],
+                        dt: float) -> dict:
+    """The force between the hands by the geometry it met and the law that carried it.
+
+    ``sums``: (law index in ``labels``, skin body, skin counterpart, crossing bin, tissue body,
+    tissue counterpart, crossing bin) -> normal force (N) summed over frames ``dt`` apart
+    (`softhand.envs.run.ContactAreas.geometry`; each side's class as `contact_class` names it,
+    the skin's pressed by the tissue's geom and the tissue's by the skin's). Returns the shares
+    (%) of the force whose skin law, tissue law and both were made for the contact's class
+    (`law_fits`; a relaxation pad's contact is counted whole), and per class and law its force
+    (N s), share and fits, largest first.
+    """
+    total = sum(sums.values())
+    rows: dict[tuple, dict] = {}
+    own = {"skin": 0.0, "tissue": 0.0, "both": 0.0}
+    for (li, body, cp, b, t_body, t_cp, tb), f in sums.items():
+        label = labels[li]
+        skin_law, tissue_law = law_classes(label)
+        skin_ok = _fits(skin_law, body, cp, b)
+        tissue_ok = _fits(tissue_law, t_body, t_cp, tb)
+        own["skin"] += f * skin_ok
+        own["tissue"] += f * tissue_ok
+        own["both"] += f * (skin_ok and tissue_ok)
+        key = (f"{cp} on {body}{_bin_text(b)}", label)
+        row = rows.setdefault(key, {"contact": key[0], "law": label, "skin_law_class": skin_law,
+                                    "skin_fits": skin_ok, "force_Ns": 0.0, "tissue": {}})
+        row["force_Ns"] += f * dt
+        tkey = f"{t_cp} on {t_body}{_bin_text(tb)}"
+        t = row["tissue"].setdefault(tkey, {"tissue_law_class": tissue_law,
+                                            "fits": tissue_ok, "force_Ns": 0.0})
+        t["force_Ns"] += f * dt
+    pct = (lambda v: 100.0 * v / total) if total > 0 else (lambda v: 0.0)
+    classes = sorted(rows.values(), key=lambda r: -r["force_Ns"])
+    for r in classes:
+        r["share_pct"] = pct(r["force_Ns"] / dt) if dt > 0 else 0.0
+    return {"total_Ns": total * dt,
+            "skin_own_class_share_pct": pct(own["skin"]),
+            "tissue_own_class_share_pct": pct(own["tissue"]),
+            "own_class_share_pct": pct(own["both"]),
+            "classes": classes}
