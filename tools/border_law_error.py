@@ -16,11 +16,18 @@ history, with its relaxation), as the RMS and largest difference in % of 2 N ove
 0-2 N and 0-20 N. Beside pocket2-sil, the border's radius moved: width 20 mm, height 7.7 mm
 (13.0 mm) and 9 mm (11.1 mm); a flatter section leaves its flanks too tight for a 2 mm pocket's
 layers, so the FE's phalanx reaches no larger radius. Writes ``OUT.md`` and ``OUT.json``.
+
+``--handshake`` adds what the palm's law does to the handshake: the default handshake (neutral,
+seeds 0-2) as shipped against the same with every palm/finger pair given its skin's
+phalanx/finger pair law instead (the class the border follows to 2 N, too soft beyond it): a
+what-if that swaps calibrated pair parameters in `softhand.envs.skins.pair_choices`, not a law
+of the border (there is none yet).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -73,11 +80,71 @@ def _errors(fe: dict, design: str) -> dict:
     return out
 
 
+def _swap_palm_finger(original):
+    """`pair_choices` with each palm/finger pair carrying its skin's phalanx/finger pair law."""
+    from softhand.envs import skins as sk
+
+    def choices(model, skins, representations=None, *, directory=sk.SKINS_DIR,
+                contact_laws="geometry"):
+        out = original(model, skins, representations, directory=directory,
+                       contact_laws=contact_laws)
+        tissue = sk.series_law("rigid", str(directory))
+        for name, c in out.items():
+            if c.law != "palm/finger":
+                continue
+            _, skin = sk.skin_of_pair(name, skins)
+            law = sk._calibration(skin, str(directory)).pair_laws["phalanx/finger"]
+            rep = sk.get_representation(sk.DEFAULT_REPRESENTATION)
+            out[name] = sk.PairChoice(c.contact, "phalanx/finger (what-if)",
+                                      rep.hand_pair_law(law.pair.params, tissue),
+                                      float(law.pair.calibrated_max_N))
+        return out
+    return choices
+
+
+def _handshakes() -> list[dict]:
+    from softhand.envs import skins as sk
+    from softhand.envs.run import run_handshake
+
+    rows = []
+    for seed in (0, 1, 2):
+        for what in ("shipped", "palm/finger pairs on the phalanx/finger law"):
+            original = sk.pair_choices
+            if what != "shipped":
+                sk.pair_choices = _swap_palm_finger(original)
+            try:
+                r = run_handshake(seed=seed)
+            finally:
+                sk.pair_choices = original
+            table = r.table()
+            over = r.overload()
+            acc = r.force_accounting()
+            rows.append({"seed": seed, "what": what,
+                         "peak_N": {k: v["peak_N"] for k, v in table.items()},
+                         "over_2N": r.over_2n, "total_Ns": acc["total_Ns"],
+                         "deepest_pair_mm": over["deepest_pair_mm"],
+                         "deepest_pair": over["deepest_pair"],
+                         "bone_on_bone_peak_N": over["bone_on_bone_peak_N"]})
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="reports/border-law-error")
     ap.add_argument("--designs", default="all")
+    ap.add_argument("--handshake", action="store_true",
+                    help="also the handshake with the palm/finger pairs swapped (a what-if)")
+    ap.add_argument("--handshake-only", action="store_true",
+                    help="rerun only the what-if, keeping the FE part of OUT.json")
     args = ap.parse_args()
+    out = Path(args.out)
+    if args.handshake_only:
+        data = json.loads(out.with_suffix(".json").read_text(encoding="utf-8"))
+        data["handshakes"] = _handshakes()
+        atomic_write_json(out.with_suffix(".json"), data)
+        atomic_write_text(out.with_suffix(".md"), markdown(data))
+        print(markdown(data))
+        return
     designs = list(DESIGNS) if args.designs == "all" else args.designs.split(",")
     data: dict = {"machine": machine_info(), "border": BORDER, "finger": FINGER, "rows": [],
                   "radii": []}
@@ -93,7 +160,8 @@ def main() -> None:
         fe = _fe("pocket2-sil", geometry)
         data["radii"].append({"geometry": geometry, "fe": fe,
                               "errors": None if "error" in fe else _errors(fe, "pocket2-sil")})
-    out = Path(args.out)
+    if args.handshake:
+        data["handshakes"] = _handshakes()
     atomic_write_json(out.with_suffix(".json"), data)
     atomic_write_text(out.with_suffix(".md"), markdown(data))
     print(markdown(data))
@@ -143,6 +211,22 @@ def markdown(d: dict) -> str:
         lines.append(f"| {g['width_mm']:g} x {g['height_mm']:g} | {rad:.1f} | "
                      f"{fe['d_2N_mm']:.3f} | {_cell(r['errors']['palm/finger'], '2')} | "
                      f"{_cell(r['errors']['phalanx/finger'], '2')} |")
+    if d.get("handshakes"):
+        regions = ("Palm1", "Palm2", "Back1", "Back2")
+        lines += ["", "What the palm's law does to the handshake (`--handshake`): the default run "
+                  "(neutral, pocket2-sil) as shipped and with every palm/finger pair given its "
+                  "skin's phalanx/finger pair law (a what-if, not a border law):", "",
+                  "| seed | pairs | " + " | ".join(f"{r} peak N" for r in regions)
+                  + " | largest other region | over 2 N | force between the hands N s | deepest "
+                  "pair mm | bone on bone N |", "|---|---|" + "---|" * (len(regions) + 5)]
+        for h in d["handshakes"]:
+            others = {k: v for k, v in h["peak_N"].items() if k not in regions}
+            top = max(others, key=others.get)
+            lines.append(f"| {h['seed']} | {h['what']} | "
+                         + " | ".join(f"{h['peak_N'][r]:.1f}" for r in regions)
+                         + f" | {top} {others[top]:.1f} | {', '.join(h['over_2N'])} | "
+                         f"{h['total_Ns']:.1f} | {h['deepest_pair_mm']:.1f} | "
+                         f"{h['bone_on_bone_peak_N']:.1f} |")
     return "\n".join(lines) + "\n"
 
 
