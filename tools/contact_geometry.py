@@ -14,9 +14,12 @@ rounded border, the crossing angle) and set against the law its pair carries. Wr
    share, the law, whether it was made for it; the crossing angles summed over their bins;
 3. the radii of the rounded palm borders the fingers press (force-weighted percentiles), the
    shape issue 36's border law needs;
-4. how the answer moves with the classification's two settings (the window, the flat face's
+4. over the paper's population (30 sampled partners, seed 0; `softhand.envs.population`), the
+   prosthetic hand and the human protocol: the share whose skin law fits and the share on a
+   rounded palm border, median and 10th-90th percentiles over the partners;
+5. how the answer moves with the classification's two settings (the window, the flat face's
    largest normal spread), default run;
-5. the classification's cost: one episode with and without it (wall, this machine).
+6. the classification's cost: one episode with and without it (wall, this machine).
 """
 
 from __future__ import annotations
@@ -84,6 +87,21 @@ def _sensitivity() -> list[dict]:
     return rows
 
 
+def _population(hand: str) -> dict:
+    from softhand.envs.population import run_population, sample_partners
+
+    results, errors = run_population(sample_partners(30, seed=0), {"hand": hand})
+    skin = [r["force_accounting"]["by_geometry"]["skin_own_class_share_pct"] for r in results]
+    border = [sum(c["share_pct"] for c in r["force_accounting"]["by_geometry"]["classes"]
+                  if "palm border" in c["contact"]) for r in results]
+
+    def spread(v):
+        return {"median": float(np.median(v)), "p10": float(np.percentile(v, 10)),
+                "p90": float(np.percentile(v, 90))}
+    return {"hand": hand, "partners": len(results), "failed": len(errors),
+            "skin_own_class_share_pct": spread(skin), "palm_border_share_pct": spread(border)}
+
+
 def _cost() -> dict:
     run_handshake(seed=0)  # warm
     t = time.perf_counter()
@@ -123,6 +141,8 @@ def main() -> None:
         g = _geometry(controller, hand, seed)
         data["runs"].append({"controller": controller, "hand": hand, "seed": seed, **g})
     data["border_radius_mm"] = _border_radii()
+    print("populations", flush=True)
+    data["populations"] = [_population(h) for h in ("prosthetic", "human")]
     data["sensitivity"] = _sensitivity()
     data["cost"] = _cost()
     out = Path(args.out)
@@ -160,8 +180,19 @@ def markdown(d: dict) -> str:
     rad = d["border_radius_mm"]
     lines += ["", "The rounded palm borders the partner presses in the default run, their radius "
               f"(force-weighted): 10th percentile {rad['10']:.1f} mm, median {rad['50']:.1f} mm, "
-              f"90th {rad['90']:.1f} mm (from the normals' spread over the window).", "",
-              "The classification's settings, default run:", "",
+              f"90th {rad['90']:.1f} mm (from the normals' spread over the window).", ""]
+    if d.get("populations"):
+        lines += ["Over the paper's population (30 sampled partners, seed 0), median and "
+                  "10th-90th percentiles over the partners:", "",
+                  "| sensored hand | partners | skin law made for the geometry | a finger or "
+                  "border on a rounded palm border |", "|---|---|---|---|"]
+        for p in d["populations"]:
+            a, b = p["skin_own_class_share_pct"], p["palm_border_share_pct"]
+            lines.append(f"| {p['hand']} | {p['partners']} | {a['median']:.1f} % "
+                         f"({a['p10']:.1f}-{a['p90']:.1f}) | {b['median']:.1f} % "
+                         f"({b['p10']:.1f}-{b['p90']:.1f}) |")
+        lines.append("")
+    lines += ["The classification's settings, default run:", "",
               "| window mm | flat face: normals within, deg | skin law fits | fingers on a palm "
               "border |", "|---|---|---|---|"]
     for r in d["sensitivity"]:
