@@ -16,6 +16,7 @@ from softhand.skin.local_geometry import (
     geometry_accounting,
     law_classes,
     law_fits,
+    palm_border_share_pct,
 )
 
 EDGE_R = 0.008  # the rounded box's edge radius (m)
@@ -199,3 +200,13 @@ def test_a_handshake_classifies_every_law_carrying_contact_once(representation):
     assert geo["skin_own_class_share_pct"] == pytest.approx(fitting)
     assert 0.0 <= geo["own_class_share_pct"] <= min(geo["skin_own_class_share_pct"],
                                                      geo["tissue_own_class_share_pct"])
+
+
+def test_the_palm_border_share_counts_the_skin_side_only():
+    """A rounded palm border on the skin's side (pressed by a finger or a border), not a
+    border that presses a phalanx."""
+    g = {"classes": [{"contact": "finger on palm border 60-75 deg", "share_pct": 30.0},
+                     {"contact": "border on palm border", "share_pct": 5.0},
+                     {"contact": "border on phalanx 45-60 deg", "share_pct": 40.0},
+                     {"contact": "finger on palm face", "share_pct": 25.0}]}
+    assert palm_border_share_pct(g) == pytest.approx(35.0)

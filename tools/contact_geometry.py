@@ -80,7 +80,7 @@ def _sensitivity() -> list[dict]:
             g = _geometry("neutral", "prosthetic", 0)
         finally:
             lg.WINDOW_MM, lg.FACE_DEG = old
-        border = sum(c["share_pct"] for c in g["classes"] if "palm border" in c["contact"])
+        border = lg.palm_border_share_pct(g)
         rows.append({"window_mm": window, "face_deg": face,
                      "skin_own_class_share_pct": g["skin_own_class_share_pct"],
                      "palm_border_share_pct": border})
@@ -92,8 +92,7 @@ def _population(hand: str) -> dict:
 
     results, errors = run_population(sample_partners(30, seed=0), {"hand": hand})
     skin = [r["force_accounting"]["by_geometry"]["skin_own_class_share_pct"] for r in results]
-    border = [sum(c["share_pct"] for c in r["force_accounting"]["by_geometry"]["classes"]
-                  if "palm border" in c["contact"]) for r in results]
+    border = [lg.palm_border_share_pct(r["force_accounting"]["by_geometry"]) for r in results]
 
     def spread(v):
         return {"median": float(np.median(v)), "p10": float(np.percentile(v, 10)),

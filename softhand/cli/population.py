@@ -137,6 +137,7 @@ def population(n, seed, designs, controllers, threads, cluster, out_dir, hand,
                 if sweep:
                     click.echo(f"{name}: {len(results)} of {n} partners")
                 _print_population(summary)
+                _print_geometry(results)
             listed.append({"design": meta["design"], "design_file": meta["design_file"],
                            "controller": controller,
                            "folder": name if results else None, "finished": len(results),
@@ -184,6 +185,29 @@ def _write_population(out: Path, partners: list, results: list[dict], meta: dict
     population_figure([r["peak_N"] for r in results], paper()["handshake"]["over_2N"],
                       out / "fig4.png", title=title)
     return summary
+
+
+def _print_geometry(results: list[dict]) -> None:
+    """One line: over the partners, the share of the force whose skin law was made for the
+    contact's geometry, and the share on a rounded palm border
+    (`softhand.skin.local_geometry`; each partner's ``force_accounting.by_geometry``)."""
+    import numpy as np
+
+    from softhand.skin.local_geometry import palm_border_share_pct
+
+    geo = [r["force_accounting"].get("by_geometry") for r in results]
+    geo = [g for g in geo if g]
+    if not geo:
+        return
+    fits = np.array([g["skin_own_class_share_pct"] for g in geo])
+    border = np.array([palm_border_share_pct(g) for g in geo])
+    click.echo(f"the law against the shapes each contact met (median over {len(geo)} partners, "
+               f"10-90 %): a skin law made for the contact's geometry carried "
+               f"{np.median(fits):.1f} % ({np.percentile(fits, 10):.1f}-"
+               f"{np.percentile(fits, 90):.1f}) of the force; on a rounded palm border "
+               f"{np.median(border):.1f} % ({np.percentile(border, 10):.1f}-"
+               f"{np.percentile(border, 90):.1f}); per partner: results.json, "
+               "force_accounting.by_geometry")
 
 
 def _print_population(summary: dict[str, dict]) -> None:

@@ -40,7 +40,7 @@ from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, tissue_counterpa
 
 __all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "WINDOW_MM", "LocalGeometry",
            "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
-           "law_classes", "law_fits"]
+           "law_classes", "law_fits", "palm_border_share_pct"]
 
 #: the neighbourhood of a contact point whose hull faces decide face or border (mm)
 WINDOW_MM = 6.0
@@ -271,3 +271,9 @@ def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list
             "tissue_own_class_share_pct": pct(own["tissue"]),
             "own_class_share_pct": pct(own["both"]),
             "classes": classes}
+
+
+def palm_border_share_pct(accounting: dict) -> float:
+    """The share (%) of a `geometry_accounting`'s force pressed into a rounded palm border."""
+    return float(sum(c["share_pct"] for c in accounting["classes"]
+                     if c["contact"].split(" on ")[1].startswith("palm border")))
