@@ -102,11 +102,20 @@ class _Hull:
         self._edge2 = np.maximum((self._edges ** 2).sum(axis=2), 1e-30)
         self._centroid = tri.mean(axis=1)
         self._reach = np.linalg.norm(tri - self._centroid[:, None, :], axis=2).max(axis=1)
+        self._cells: dict[tuple[int, int, int], tuple] = {}
+
+    def cell(self, index: tuple[int, int, int]) -> tuple[str, float | None, np.ndarray | None]:
+        """`shape_at` the centre of the `CELL_MM` cell ``index`` of the geom's frame, kept."""
+        found = self._cells.get(index)
+        if found is None:
+            found = self._cells[index] = self.shape_at(np.array(index, dtype=float)
+                                                       * (1e-3 * CELL_MM))
+        return found
 
     def shape_at(self, p: np.ndarray) -> tuple[str, float | None, np.ndarray | None]:
         """(kind, radius mm, axis in the geom's frame) at ``p`` (the geom's frame, m)."""
         under = int(np.argmax(self.normal @ p - self.offset))  # the face it lies under
-        normals = self.normal[np.union1d(self.within(p, 1e-3 * WINDOW_MM), [under])]
+        normals = self.normal[np.append(self.within(p, 1e-3 * WINDOW_MM), under)]
         dots = np.clip(normals @ normals.T, -1.0, 1.0)
         i, j = np.unravel_index(int(np.argmin(dots)), dots.shape)
         spread = float(np.arccos(dots[i, j]))
@@ -129,41 +138,82 @@ class _Hull:
         return cand[np.where(inside, plane, seg) <= radius]
 
 
+#: the hulls read so far, by their vertices and faces, with the cells classified on them: a
+#: population's worlds and an env's episodes share the same palm (a few hundred cells an
+#: episode, each a hull query); at most `_HULLS_KEPT` hulls are kept
+_HULLS: dict[bytes, _Hull] = {}
+_HULLS_KEPT = 256
+
+
+def _hull(model: mujoco.MjModel, geom: int) -> _Hull:
+    mesh = int(model.geom_dataid[geom])
+    v0, nv = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+    f0, nf = int(model.mesh_faceadr[mesh]), int(model.mesh_facenum[mesh])
+    key = (model.mesh_vert[v0:v0 + nv].tobytes() + model.mesh_face[f0:f0 + nf].tobytes()
+           + repr((CELL_MM, WINDOW_MM, FACE_DEG)).encode())
+    hull = _HULLS.get(key)
+    if hull is None:
+        if len(_HULLS) >= _HULLS_KEPT:
+            _HULLS.pop(next(iter(_HULLS)))
+        hull = _HULLS[key] = _Hull(model, geom)
+    return hull
+
+
 class LocalGeometry:
-    """`LocalShape` of any geom of ``model`` at a point (the meshes' hulls read once)."""
+    """`LocalShape` of any geom of ``model`` at a point (the meshes' hulls read once).
+
+    Each geom's kind and radius are read from the model once; a call costs a few microseconds
+    (a handshake classifies about 10 000 contact sides), a mesh's new cell a hull query."""
 
     def __init__(self, model: mujoco.MjModel) -> None:
         self.model = model
         self._hulls: dict[int, _Hull] = {}
         self._cells: dict[tuple, tuple] = {}
+        # per geom: (kind, radius mm, the column of geom_xmat of its axis, or -1 for none)
+        self._kinds: list[tuple[str, float | None, int]] = []
+        for g in range(model.ngeom):
+            kind, size = int(model.geom_type[g]), model.geom_size[g]
+            if kind in (_CAPSULE, _CYLINDER):
+                self._kinds.append(("round", 1e3 * float(size[0]), 2))
+            elif kind == _SPHERE:
+                self._kinds.append(("round", 1e3 * float(size[0]), -1))
+            elif kind == _ELLIPSOID:
+                self._kinds.append(("round", 1e3 * float(size[:3].min()),
+                                    int(np.argmax(size[:3]))))
+            else:
+                self._kinds.append(("mesh" if kind == _MESH else "face", None, -1))
 
     def shape(self, data: mujoco.MjData, geom: int, point) -> LocalShape:
         """The shape of ``geom`` at ``point`` (world, m), e.g. a contact's ``pos``."""
-        m = self.model
-        kind = int(m.geom_type[geom])
-        R = data.geom_xmat[geom].reshape(3, 3)
-        if kind in (_CAPSULE, _CYLINDER):
-            return LocalShape("round", 1e3 * float(m.geom_size[geom][0]), R[:, 2].copy())
-        if kind == _SPHERE:
-            return LocalShape("round", 1e3 * float(m.geom_size[geom][0]), None)
-        if kind == _ELLIPSOID:
-            size = m.geom_size[geom][:3]
-            return LocalShape("round", 1e3 * float(size.min()), R[:, int(np.argmax(size))].copy())
-        if kind != _MESH:
+        kind, radius, column = self._kinds[geom]
+        if kind == "round":
+            if column < 0:
+                return LocalShape("round", radius, None)
+            x = data.geom_xmat[geom]
+            return LocalShape("round", radius, np.array((x[column], x[column + 3],
+                                                         x[column + 6])))
+        if kind == "face":
             return LocalShape("face", None, None)
         # the shape at the centre of the point's CELL_MM cell of the geom's frame, kept per
         # cell: a contact moves little between frames, and the answer depends on the cell alone
-        cell = np.round((R.T @ (np.asarray(point, dtype=float) - data.geom_xpos[geom]))
-                        / (1e-3 * CELL_MM)).astype(np.int64)
-        key = (geom, *cell.tolist())
+        x = data.geom_xmat[geom].tolist()
+        c = data.geom_xpos[geom].tolist()
+        p = point.tolist() if isinstance(point, np.ndarray) else list(point)
+        dx, dy, dz = p[0] - c[0], p[1] - c[1], p[2] - c[2]
+        scale = 1.0 / (1e-3 * CELL_MM)
+        key = (geom, round((x[0] * dx + x[3] * dy + x[6] * dz) * scale),
+               round((x[1] * dx + x[4] * dy + x[7] * dz) * scale),
+               round((x[2] * dx + x[5] * dy + x[8] * dz) * scale))
         found = self._cells.get(key)
         if found is None:
             hull = self._hulls.get(geom)
             if hull is None:
-                hull = self._hulls[geom] = _Hull(m, geom)
-            found = self._cells[key] = hull.shape_at(cell * (1e-3 * CELL_MM))
+                hull = self._hulls[geom] = _hull(self.model, geom)
+            found = self._cells[key] = hull.cell(key[1:])
         kind, radius, axis = found
-        return LocalShape(kind, radius, None if axis is None else R @ axis)
+        if axis is None:
+            return LocalShape(kind, radius, None)
+        return LocalShape(kind, radius, data.geom_xmat[geom].reshape(3, 3) @ axis)
 
 
 def crossing_deg(a: LocalShape, b: LocalShape) -> float | None:
