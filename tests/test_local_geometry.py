@@ -130,10 +130,10 @@ def test_a_law_fits_only_the_class_it_was_made_for():
 
 def test_the_accounting_shares_are_the_forces_whose_laws_fit():
     labels = ("palm/finger", "phalanx/finger")
-    sums = {(0, "palm border", "finger", 5, "phalanx", "border", 5): 3.0,
-            (0, "palm face", "finger", -1, "phalanx", "flat", -1): 1.0,
-            (1, "phalanx", "finger", 5, "phalanx", "finger", 5): 4.0,
-            (1, "phalanx", "finger", 2, "phalanx", "finger", 2): 2.0}
+    sums = {(0, "palm border", "finger", "phalanx", "border", 5): 3.0,
+            (0, "palm face", "finger", "phalanx", "flat", -1): 1.0,
+            (1, "phalanx", "finger", "phalanx", "finger", 5): 4.0,
+            (1, "phalanx", "finger", "phalanx", "finger", 2): 2.0}
     g = geometry_accounting(sums, labels, dt=0.01)
     assert g["total_Ns"] == pytest.approx(0.1)
     assert g["skin_own_class_share_pct"] == pytest.approx(50.0)  # 1 + 4 of 10

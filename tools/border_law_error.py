@@ -3,7 +3,7 @@
     python tools/border_law_error.py [--out reports/border-law-error] [--designs all]
 
 `reports/contact-geometry.md` finds 94 % of the default handshake's force on a rounded border of
-the prosthetic palm's one convex surface (radius 8-23 mm, median 13.7, p10-p90), pressed by the
+the prosthetic palm's one convex surface (radius 8-23 mm, median 13.6, p10-p90), pressed by the
 partner's fingers and carried by the palm/finger law: an FE cylinder of radius 9 mm across a flat
 slab of the design's layers over the metacarpals. No FE curve of a rounded border exists yet
 (issue 36, item 2), so this runs the nearest body the FE has: the phalanx section widened to a
@@ -49,12 +49,11 @@ def _fe(design: str, geometry: dict) -> dict:
                             hold_s=0.0)
     try:
         r = indent(design, s)
-        status = "reached 20 N"
     except ConvergenceError as exc:
         return {"error": str(exc)[:200]}
     ramp = ~r.hold
     return {"time_s": r.time_s[ramp].tolist(), "displacement_mm": r.displacement_mm[ramp].tolist(),
-            "force_N": r.force_N[ramp].tolist(), "status": status,
+            "force_N": r.force_N[ramp].tolist(), "status": r.status.value,
             "d_2N_mm": r.displacement_at(2.0)}
 
 
@@ -93,7 +92,8 @@ def _swap_palm_finger(original):
             if c.law != "palm/finger":
                 continue
             _, skin = sk.skin_of_pair(name, skins)
-            law = sk._calibration(skin, str(directory)).pair_laws["phalanx/finger"]
+            law = load_calibration(skin, directory, require=("soft-contact",)
+                                   ).pair_laws["phalanx/finger"]
             rep = sk.get_representation(sk.DEFAULT_REPRESENTATION)
             out[name] = sk.PairChoice(c.contact, "phalanx/finger (what-if)",
                                       rep.hand_pair_law(law.pair.params, tissue),

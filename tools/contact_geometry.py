@@ -56,7 +56,7 @@ def _border_radii() -> dict:
     def classify(self, data, c, law, f):
         original(self, data, c, law, f)
         skin = c.geom1 if self.hand[c.geom1] == 0 else c.geom2
-        s = self._local.shape(data, skin, c.pos)
+        s = self._local.shape(data, skin, lg.surface_point(c, skin))  # as _classify reads it
         if s.kind == "border":
             seen.append((s.radius_mm, f))
 

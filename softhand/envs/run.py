@@ -22,9 +22,9 @@ from softhand.paper import paper
 from softhand.sensors.device import ASSUMPTIONS
 from softhand.skin.local_geometry import (
     LocalGeometry,
-    contact_class,
-    crossing_bin,
     geometry_accounting,
+    pair_class,
+    surface_point,
 )
 from softhand.validate import show
 
@@ -531,9 +531,7 @@ class ContactAreas:
         self.double_N = 0.0
         self._force = np.zeros(6)
         #: the law-carrying contacts' normal force (N) summed over the calls that classify
-        #: (``geometry=True``), by (law index, the skin's body, its counterpart, their crossing
-        #: bin, the tissue's body, its counterpart, their crossing bin):
-        #: `softhand.skin.local_geometry`
+        #: (``geometry=True``), by (law index, *`softhand.skin.local_geometry.pair_class`)
         self.geometry: dict[tuple, float] = {}
         self._local = LocalGeometry(model)
 
@@ -612,14 +610,8 @@ class ContactAreas:
     def _classify(self, data: mujoco.MjData, c, law: int, f: float) -> None:
         """Add a law-carrying contact's force to `geometry` under its local geometry."""
         skin, other = (c.geom1, c.geom2) if self.hand[c.geom1] == 0 else (c.geom2, c.geom1)
-        # each geom's shape where its own surface is (the contact point is their midpoint; the
-        # normal points from geom1 into geom2, so geom1's surface lies half the depth along it)
-        half = 0.5 * max(-float(c.dist), 0.0) * c.frame[:3]
-        at = {c.geom1: c.pos + half, c.geom2: c.pos - half}
-        a, b = self._local.shape(data, skin, at[skin]), self._local.shape(data, other, at[other])
-        body, cp, x = contact_class(a, b)
-        t_body, t_cp, tx = contact_class(b, a)
-        key = (law, body, cp, crossing_bin(x), t_body, t_cp, crossing_bin(tx))
+        key = (law, *pair_class(self._local.shape(data, skin, surface_point(c, skin)),
+                                self._local.shape(data, other, surface_point(c, other))))
         self.geometry[key] = self.geometry.get(key, 0.0) + f
 
     def _pad_share(self, data: mujoco.MjData, c) -> float:

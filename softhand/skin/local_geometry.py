@@ -40,7 +40,7 @@ from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, tissue_counterpa
 
 __all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "WINDOW_MM", "LocalGeometry",
            "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
-           "law_classes", "law_fits", "palm_border_share_pct"]
+           "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "surface_point"]
 
 #: the neighbourhood of a contact point whose hull faces decide face or border (mm)
 WINDOW_MM = 6.0
@@ -168,7 +168,6 @@ class LocalGeometry:
     def __init__(self, model: mujoco.MjModel) -> None:
         self.model = model
         self._hulls: dict[int, _Hull] = {}
-        self._cells: dict[tuple, tuple] = {}
         # per geom: (kind, radius mm, the column of geom_xmat of its axis, or -1 for none)
         self._kinds: list[tuple[str, float | None, int]] = []
         for g in range(model.ngeom):
@@ -201,16 +200,12 @@ class LocalGeometry:
         p = point.tolist() if isinstance(point, np.ndarray) else list(point)
         dx, dy, dz = p[0] - c[0], p[1] - c[1], p[2] - c[2]
         scale = 1.0 / (1e-3 * CELL_MM)
-        key = (geom, round((x[0] * dx + x[3] * dy + x[6] * dz) * scale),
-               round((x[1] * dx + x[4] * dy + x[7] * dz) * scale),
-               round((x[2] * dx + x[5] * dy + x[8] * dz) * scale))
-        found = self._cells.get(key)
-        if found is None:
-            hull = self._hulls.get(geom)
-            if hull is None:
-                hull = self._hulls[geom] = _hull(self.model, geom)
-            found = self._cells[key] = hull.cell(key[1:])
-        kind, radius, axis = found
+        hull = self._hulls.get(geom)
+        if hull is None:
+            hull = self._hulls[geom] = _hull(self.model, geom)
+        kind, radius, axis = hull.cell((round((x[0] * dx + x[3] * dy + x[6] * dz) * scale),
+                                        round((x[1] * dx + x[4] * dy + x[7] * dz) * scale),
+                                        round((x[2] * dx + x[5] * dy + x[8] * dz) * scale)))
         if axis is None:
             return LocalShape(kind, radius, None)
         return LocalShape(kind, radius, data.geom_xmat[geom].reshape(3, 3) @ axis)
@@ -238,6 +233,21 @@ def contact_class(body: LocalShape, counterpart: LocalShape) -> tuple[str, str, 
     ``phalanx``, ``palm face`` or ``palm border``; counterpart ``finger``, ``flat`` or
     ``border``; the crossing angle (deg) where both have an axis."""
     return _body(body), _counterpart(counterpart), crossing_deg(body, counterpart)
+
+
+def pair_class(skin: LocalShape, other: LocalShape) -> tuple[str, str, str, str, int]:
+    """Both sides of a contact, the key of `geometry_accounting`: (the skin's body, its
+    counterpart, the tissue's body, its counterpart, their crossing bin)."""
+    body, counterpart, crossing = contact_class(skin, other)
+    return body, counterpart, _body(other), _counterpart(skin), crossing_bin(crossing)
+
+
+def surface_point(contact, geom: int) -> np.ndarray:
+    """Where ``geom``'s own surface is at a MuJoCo contact (world, m): the contact point is the
+    midpoint of the two surfaces, and the normal points from geom1 into geom2, so geom1's
+    surface lies half the depth along it and geom2's half the depth against it."""
+    half = 0.5 * max(-float(contact.dist), 0.0) * contact.frame[:3]
+    return contact.pos + half if geom == contact.geom1 else contact.pos - half
 
 
 def law_classes(label: str) -> tuple[str, str]:
@@ -285,10 +295,10 @@ def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list
                         dt: float) -> dict:
     """The force between the hands by the geometry it met and the law that carried it.
 
-    ``sums``: (law index in ``labels``, skin body, skin counterpart, crossing bin, tissue body,
-    tissue counterpart, crossing bin) -> normal force (N) summed over frames ``dt`` apart
-    (`softhand.envs.run.ContactAreas.geometry`; each side's class as `contact_class` names it,
-    the skin's pressed by the tissue's geom and the tissue's by the skin's). Returns the shares
+    ``sums``: (law index in ``labels``, *`pair_class`) -> normal force (N) summed over frames
+    ``dt`` apart (`softhand.envs.run.ContactAreas.geometry`: each side's class as
+    `contact_class` names it, the skin's pressed by the tissue's geom and the tissue's by the
+    skin's, and the crossing bin both share). Returns the shares
     (%) of the force whose skin law, tissue law and both were made for the contact's class
     (`law_fits`; a relaxation pad's contact is counted whole), and per class and law its force
     (N s), share and fits, largest first.
@@ -296,11 +306,11 @@ def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list
     total = sum(sums.values())
     rows: dict[tuple, dict] = {}
     own = {"skin": 0.0, "tissue": 0.0, "both": 0.0}
-    for (li, body, cp, b, t_body, t_cp, tb), f in sums.items():
+    for (li, body, cp, t_body, t_cp, b), f in sums.items():
         label = labels[li]
         skin_law, tissue_law = law_classes(label)
         skin_ok = _fits(skin_law, body, cp, b)
-        tissue_ok = _fits(tissue_law, t_body, t_cp, tb)
+        tissue_ok = _fits(tissue_law, t_body, t_cp, b)
         own["skin"] += f * skin_ok
         own["tissue"] += f * tissue_ok
         own["both"] += f * (skin_ok and tissue_ok)
@@ -308,7 +318,7 @@ def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list
         row = rows.setdefault(key, {"contact": key[0], "law": label, "skin_law_class": skin_law,
                                     "skin_fits": skin_ok, "force_Ns": 0.0, "tissue": {}})
         row["force_Ns"] += f * dt
-        tkey = f"{t_cp} on {t_body}{_bin_text(tb)}"
+        tkey = f"{t_cp} on {t_body}{_bin_text(b)}"
         t = row["tissue"].setdefault(tkey, {"tissue_law_class": tissue_law,
                                             "fits": tissue_ok, "force_Ns": 0.0})
         t["force_Ns"] += f * dt
