@@ -193,21 +193,23 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
 
 
 @pytest.mark.slow
-def test_the_grasp_is_the_cheapest_start_and_finite_differences_find_it(monkeypatch):
-    """The grasp is the cheapest of the solver's starts, not the first that meets the acceptance:
-    at the -2.5 SD corner (159 x 73 mm) that one was 20 % dearer and 38 deg away
-    (reports/grasp-agreement.md). The same starts solved with mujoco.minimize's finite
-    differences instead of the analytic Jacobian land within 2 deg and 2 mm of it (measured
-    0.6 deg, 0.3 mm; on 9 of 30 sampled partners they do not: the report lists them)."""
+def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
+    """The grasp is the cheapest of the solver's starts, then hops to any cheaper minimum nearby:
+    its cost is at most the cheapest start's. For a 174 x 101 mm partner the starts alone left
+    two answers 10.5 deg and 6 mm apart (the analytic Jacobian's cheapest start and finite
+    differences', 1.9 % apart in cost; reports/grasp-agreement.md had 9 such pairs of hands of
+    34); with the hops, finite differences (another solver of the same definition) land within
+    the issue's 2 deg and 2 mm of the grasp (measured 0.0 deg, 0.0 mm)."""
     from softhand.hands.grasp import _Problem, _solve_starts, _start_runs
 
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
     config = SceneConfig(partner=PartnerConfig(hand=HandConfig(
-        hand_length_m=(187.5 - 2.5 * 11.37) / 1000.0, hand_width_m=(89.53 - 2.5 * 6.80) / 1000.0)))
+        hand_length_m=0.17419935230862254, hand_width_m=0.10135770156448491)))
     grasp = solve_grasp.__wrapped__(config)
     problem = _Problem(config, GRASP_SETTINGS)
     costs = [cost for cost, _, _ in _start_runs(problem, GRASP_SETTINGS)]
-    assert grasp.cost == pytest.approx(min(costs), rel=1e-9, abs=0.0)
+    assert grasp.cost <= min(costs)
+    assert grasp.cost < (1.0 - 0.01) * min(costs)  # the hops found the cheaper minimum here
     _, x_fd, _ = _solve_starts(problem, GRASP_SETTINGS, finite_differences=True)
     joints = np.degrees(np.abs(x_fd[6:] - np.concatenate([grasp.partner_q,
                                                           grasp.prosthetic_q])).max())
