@@ -140,23 +140,27 @@ _PRUNE_M = 1e-6
 #: or lower than 10^0.1 in each, 0.35-0.5 s a grasp instead of 0.4-0.7 s.
 _MU_FACTOR = 10.0 ** 0.5
 #: The hops after the starts (`_hop`): each perturbs the best grasp found by a normal draw of
-#: these scales (the partner's position, its rotation vector, every joint; every other hop
-#: _HOP_WIDE times wider) from a generator seeded _HOP_SEED, solves the contact stage from there,
+#: these scales (the partner's position, its rotation vector, every joint), times the next of
+#: _HOP_TIERS in turn, from a generator seeded _HOP_SEED, solves the contact stage from there,
 #: and keeps a cheaper answer; the search stops after _HOP_PATIENCE hops in a row find nothing
 #: cheaper (by _HOP_GAIN, relative), or at _HOP_MAX. The minima the starts leave lie a few
-#: degrees apart (a finger on one side of a neighbour or the other, 0.1-3 % in cost), at the
-#: small corners up to 29 deg and 15 % apart: a hop of about 5 deg per joint crosses to the near
-#: ones, a wide one to the far. Chosen on the pairs of hands where two solvers or two seeds
-#: disagreed (tools/grasp_agreement.py): patience 4 left 3 of 11 apart, 8 left 3 of 34 to
-#: another seed; narrow hops alone missed the 159 x 107 mm corner's minimum 15 % cheaper. A grasp
-#: costs about 2-6 s instead of 1.5-2.5 s (then it is cached).
+#: degrees apart (a finger on one side of a neighbour or the other, 0.1-3 % in cost), some up to
+#: 10 mm and 8 deg apart in the partner's pose, at the small corners up to 29 deg and 15 % apart:
+#: a hop of about 5 deg per joint crosses to the near ones, a wider one to the far. Chosen on the
+#: pairs of hands where two solvers or two seeds disagreed (tools/grasp_agreement.py): patience 4
+#: left 3 of 11 apart; tiers (1, 3) and patience 16 left 3 of 34 to another seed, 6-10 mm away
+#: and 0.2-1.3 % in cost, which tiers (1, 3, 6) and patience 24 reach: all 30 sampled partners
+#: within 0.7 deg and 0.3 mm of both checks, the 159 x 73 mm corner still apart (seed 1 stops
+#: 2.1 % dearer; finite differences start in a basin 23 % dearer); narrow hops alone missed the
+#: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 3-11 s instead of 1.5-2.5 s
+#: (then it is cached).
 _HOP_SEED = 0
 _HOP_POS_M = 0.002
 _HOP_TURN_RAD = 0.03
 _HOP_JOINT_RAD = 0.08
-_HOP_PATIENCE = 16
-_HOP_MAX = 60
-_HOP_WIDE = 3.0
+_HOP_PATIENCE = 24
+_HOP_MAX = 90
+_HOP_TIERS = (1.0, 3.0, 6.0)
 _HOP_GAIN = 1e-6
 #: Forward-difference step of the finite-difference solver (the check of the analytic one, in
 #: units of max(1, |x|)): the distances are accurate to ccd_tolerance (1e-6 m), so
@@ -760,7 +764,7 @@ def _hop(problem: _Problem, settings: GraspSettings, best: tuple[float, np.ndarr
     fails = hops = 0
     while fails < _HOP_PATIENCE and hops < _HOP_MAX:
         hops += 1
-        wide = _HOP_WIDE if hops % 2 == 0 else 1.0
+        wide = _HOP_TIERS[hops % len(_HOP_TIERS)]
         x0 = np.clip(x + wide * scale * rng.standard_normal(problem.n), *problem.bounds)
         y, trace = _solve(problem, x0, True, settings.max_iter,
                           finite_differences=finite_differences)
