@@ -46,8 +46,10 @@ def test_shapes_and_classes_follow_the_geoms(model):
     assert classify(model, g["palm"], g["floor"]) == "palm/flat"
     # a round geom wider than a finger presses like a flat (20 mm > FINGER_MAX_RADIUS_MM)
     assert classify(model, g["phalanx"], g["thick"]) == "phalanx/flat"
-    # the tissue is pressed by the skin's body: a phalanx like a finger, a palm like a flat
-    assert [tissue_counterpart(k) for k in CLASSES] == ["finger", "finger", "flat", "flat"]
+    # the tissue is pressed by the skin's body: a phalanx and a rounded border (of a finger's
+    # radius) like a finger, a palm face like a flat
+    assert [tissue_counterpart(k) for k in CLASSES] == ["finger", "finger", "flat", "flat",
+                                                        "finger"]
 
 
 def _ramp(law, depth_mm: float, speed: float = 0.5, n: int = 300) -> Curve:
@@ -103,19 +105,30 @@ def envs():
 
 def test_each_pair_takes_the_law_of_its_class(envs):
     """The shipped pocket2-sil has a law for every class; each pair carries its class's law in
-    geometry mode and the plate law in plate mode; the pair's class is that of its two geoms."""
-    from softhand.envs.skins import series_law
+    geometry mode and the plate law in plate mode; the pair's class is that of its two geoms,
+    but where the grasp puts a finger on the palm's rounded border: the border's (the model
+    records those pairs, and they are the ones found again from the grasp here)."""
+    from softhand.envs.skins import border_pairs, series_law
+    from softhand.hands.grasp import set_grasp_state, solve_grasp
     from softhand.skin.files import load_calibration
 
     cal = load_calibration("pocket2-sil")
     assert set(cal.pair_laws) == set(CLASSES)
     geo, plate = envs["geometry"], envs["plate"]
     m = geo.model
+    d = mujoco.MjData(m)
+    set_grasp_state(m, d, solve_grasp(geo.config))
+    borders = set(border_pairs(m, d))
+    # the partner's fingers wrap the ulnar border and its thumb the radial one: the proximal
+    # phalanges of all four fingers among them
+    assert {f"Palm__hum_tissue_{f}_proximal" for f in ("index", "middle", "ring", "little")} \
+        <= borders
     seen = set()
     for pid in range(m.npair):
         name = m.pair(pid).name
         g = geo.pair_laws[name]
-        assert g.contact == classify(m, int(m.pair_geom1[pid]), int(m.pair_geom2[pid]))
+        assert g.contact == ("border/finger" if name in borders else
+                             classify(m, int(m.pair_geom1[pid]), int(m.pair_geom2[pid])))
         assert g.law == g.contact and g.params == cal.pair_laws[g.contact].pair.params
         assert plate.pair_laws[name].law == "plate"
         assert plate.pair_laws[name].params == series_law("pocket2-sil")
@@ -219,7 +232,29 @@ def test_class_laws_only_refuses_an_fe_folder_without_the_class_curves(tmp_path)
                                     str(fe), "--out", str(out)])
     assert res.exit_code == 2, res.output
     for key, folder in (("phalanx/finger", "finger"), ("palm/flat", "palm-plate"),
-                        ("palm/finger", "palm-finger")):
+                        ("palm/finger", "palm-finger"), ("border/finger", "border-finger")):
         assert f"{key} ({fe / folder / 'pocket2-sil.csv'})" in res.output, res.output
     assert len(res.output.strip().splitlines()) == 1
     assert (out / "pocket2-sil.json").read_bytes() == before
+
+
+def test_the_border_class_needs_the_border_stand_in_geometry(tmp_path):
+    """The border/finger curves are the phalanx widened to BORDER_GEOMETRY under the finger; a
+    folder of the same indenter on another section (here the phalanx's own) is refused, naming
+    the geometry the class needs, and the shipped folder passes."""
+    import json
+    import shutil
+
+    from softhand.paths import FE_DIR
+    from softhand.skin.calibrate import class_folders
+
+    assert "border/finger" in class_folders("pocket2-sil", FE_DIR)
+    fe = tmp_path / "fe"
+    fe.mkdir()
+    shutil.copy(Path(FE_DIR) / "summary.json", fe / "summary.json")
+    shutil.copytree(Path(FE_DIR) / "border-finger", fe / "border-finger")
+    summary = json.loads((fe / "border-finger" / "summary.json").read_text(encoding="utf-8"))
+    summary["provenance"]["settings"]["geometry"] = {}
+    (fe / "border-finger" / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+    with pytest.raises(ValueError, match="BORDER_GEOMETRY"):
+        class_folders("pocket2-sil", fe)

@@ -1,27 +1,28 @@
-"""What the palm's rounded border costs: the laws the scene uses there against an FE of it.
+"""The palm's rounded border: the laws that could carry it against an FE of it.
 
     python tools/border_law_error.py [--out reports/border-law-error] [--designs all]
+        [--handshake]
 
-`reports/contact-geometry.md` finds 94 % of the default handshake's force on a rounded border of
+`reports/contact-geometry.md` finds most of the default handshake's force on a rounded border of
 the prosthetic palm's one convex surface (radius 8-23 mm, median 13.6, p10-p90), pressed by the
-partner's fingers and carried by the palm/finger law: an FE cylinder of radius 9 mm across a flat
-slab of the design's layers over the metacarpals. No FE curve of a rounded border exists yet
-(issue 36, item 2), so this runs the nearest body the FE has: the phalanx section widened to a
-border, width 20 mm and height 8 mm (a half ellipse, n = 2: radius a^2 / b = 12.5 mm at its top,
-the median border's; the design's layers and pocket as on the phalanx; 8 mm of skin over a flat
-bone, the palm model's 9 mm over the crest), under the same 9 mm cylinder across it, to 20 N on
-the 3D quarter model. Against it, each skin's two laws that could carry a finger there: the
-palm/finger law the pair carries and the phalanx/finger law (its elastic force on the FE's ramp
-history, with its relaxation), as the RMS and largest difference in % of 2 N over the FE's
-0-2 N and 0-20 N. Beside pocket2-sil, the border's radius moved: width 20 mm, height 7.7 mm
-(13.0 mm) and 9 mm (11.1 mm); a flatter section leaves its flanks too tight for a 2 mm pocket's
-layers, so the FE's phalanx reaches no larger radius. Writes ``OUT.md`` and ``OUT.json``.
+partner's fingers. Those pairs carry the ``border/finger`` law (`softhand.skin.contact_classes`:
+the FE's stand-in of the border, the phalanx section widened to width 20 mm and height 8 mm, a
+half ellipse of radius a^2 / b = 12.5 mm at its top, the design's layers and pocket as on the
+phalanx, 8 mm of skin over a flat bone, under a cylinder of radius 9 mm across it, to 20 N in
+3D: `calibration/fe/border-finger/`). This runs that FE again for each design and sets three
+laws against it: the border/finger law (its own class's), the palm/finger law (an FE cylinder
+across a flat slab of the design's layers over the metacarpals: what the border's pairs carried
+before they had a law of their own) and the phalanx/finger law (its elastic force on the FE's
+ramp history, with its relaxation), as the RMS and largest difference in % of 2 N over the FE's
+0-2 N and 0-20 N. For pocket2-sil, the border's radius moved (width 20 mm, height 7.7 mm: 13.0
+mm, and 9 mm: 11.1 mm; a flatter section leaves its flanks too tight for a 2 mm pocket's layers)
+and the finger crossing the border at 30, 45, 60 and 90 deg (the handshake's fingers cross it at
+30-90 deg; below 90 deg the FE runs the whole phalanx, 4x the elements). Writes ``OUT.md`` and
+``OUT.json``.
 
-``--handshake`` adds what the palm's law does to the handshake: the default handshake (neutral,
-seeds 0-2) as shipped against the same with every palm/finger pair given its skin's
-phalanx/finger pair law instead (the class the border follows to 2 N, too soft beyond it): a
-what-if that swaps calibrated pair parameters in `softhand.envs.skins.pair_choices`, not a law
-of the border (there is none yet).
+``--handshake`` adds what the border's law does to the handshake: the default handshake (neutral,
+seeds 0-2) as shipped against the same with the border's pairs on the palm/finger law, as they
+were before the border had a law (`softhand.envs.skins.pair_choices` swapped for the run).
 """
 
 from __future__ import annotations
@@ -36,16 +37,18 @@ from softhand.bench.common import machine_info, machine_line
 from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import ConvergenceError, IndentationSettings, indent
 from softhand.io import atomic_write_json, atomic_write_text
+from softhand.skin.contact_classes import BORDER_GEOMETRY, FINGER_RADIUS_MM, INDENTERS
 from softhand.skin.files import load_calibration
 
-BORDER = {"width_mm": 20.0, "height_mm": 8.0}
+BORDER = dict(BORDER_GEOMETRY)
 RADII = ({"width_mm": 20.0, "height_mm": 7.7}, {"width_mm": 20.0, "height_mm": 9.0})
-FINGER = "cylinder:9@90"
-LAWS = ("palm/finger", "phalanx/finger")
+FINGER = INDENTERS["finger"]
+CROSSINGS_DEG = (30.0, 45.0, 60.0)
+LAWS = ("border/finger", "palm/finger", "phalanx/finger")
 
 
-def _fe(design: str, geometry: dict) -> dict:
-    s = IndentationSettings(mode="3d", indenter=FINGER, geometry=geometry, max_force_N=20.0,
+def _fe(design: str, geometry: dict, indenter: str = FINGER) -> dict:
+    s = IndentationSettings(mode="3d", indenter=indenter, geometry=geometry, max_force_N=20.0,
                             hold_s=0.0)
     try:
         r = indent(design, s)
@@ -79,8 +82,9 @@ def _errors(fe: dict, design: str) -> dict:
     return out
 
 
-def _swap_palm_finger(original):
-    """`pair_choices` with each palm/finger pair carrying its skin's phalanx/finger pair law."""
+def _border_on_palm_law(original):
+    """`pair_choices` with each border/finger pair carrying its skin's palm/finger pair law (the
+    law those pairs carried before the border had its own)."""
     from softhand.envs import skins as sk
 
     def choices(model, skins, representations=None, *, directory=sk.SKINS_DIR,
@@ -89,39 +93,46 @@ def _swap_palm_finger(original):
                        contact_laws=contact_laws)
         tissue = sk.series_law("rigid", str(directory))
         for name, c in out.items():
-            if c.law != "palm/finger":
+            if c.law != "border/finger":
                 continue
             _, skin = sk.skin_of_pair(name, skins)
             law = load_calibration(skin, directory, require=("soft-contact",)
-                                   ).pair_laws["phalanx/finger"]
+                                   ).pair_laws["palm/finger"]
             rep = sk.get_representation(sk.DEFAULT_REPRESENTATION)
-            out[name] = sk.PairChoice(c.contact, "phalanx/finger (what-if)",
+            out[name] = sk.PairChoice(c.contact, "palm/finger",
                                       rep.hand_pair_law(law.pair.params, tissue),
                                       float(law.pair.calibrated_max_N))
         return out
     return choices
 
 
+HANDSHAKE_CASES = ("shipped (border/finger law)", "border pairs on the palm/finger law (before)")
+
+
 def _handshakes() -> list[dict]:
     from softhand.envs import skins as sk
+    from softhand.envs import touch
     from softhand.envs.run import run_handshake
 
     rows = []
     for seed in (0, 1, 2):
-        for what in ("shipped", "palm/finger pairs on the phalanx/finger law"):
+        for what in HANDSHAKE_CASES:
             original = sk.pair_choices
-            if what != "shipped":
-                sk.pair_choices = _swap_palm_finger(original)
+            if what != HANDSHAKE_CASES[0]:  # the spec's laws and the env's record of them
+                sk.pair_choices = touch.pair_choices = _border_on_palm_law(original)
             try:
                 r = run_handshake(seed=seed)
             finally:
-                sk.pair_choices = original
+                sk.pair_choices = touch.pair_choices = original
             table = r.table()
             over = r.overload()
             acc = r.force_accounting()
             rows.append({"seed": seed, "what": what,
                          "peak_N": {k: v["peak_N"] for k, v in table.items()},
                          "over_2N": r.over_2n, "total_Ns": acc["total_Ns"],
+                         "skin_own_class_share_pct":
+                             acc["by_geometry"]["skin_own_class_share_pct"],
+                         "by_law_share_pct": acc["by_law_share_pct"],
                          "deepest_pair_mm": over["deepest_pair_mm"],
                          "deepest_pair": over["deepest_pair"],
                          "bone_on_bone_peak_N": over["bone_on_bone_peak_N"]})
@@ -160,6 +171,12 @@ def main() -> None:
         fe = _fe("pocket2-sil", geometry)
         data["radii"].append({"geometry": geometry, "fe": fe,
                               "errors": None if "error" in fe else _errors(fe, "pocket2-sil")})
+    data["crossings"] = []
+    for angle in CROSSINGS_DEG:
+        print("pocket2-sil", angle, "deg", flush=True)
+        fe = _fe("pocket2-sil", BORDER, f"cylinder:{FINGER_RADIUS_MM:g}@{angle:g}")
+        data["crossings"].append({"crossing_deg": angle, "fe": fe, "errors": None if "error" in fe
+                                  else _errors(fe, "pocket2-sil")})
     if args.handshake:
         data["handshakes"] = _handshakes()
     atomic_write_json(out.with_suffix(".json"), data)
@@ -175,58 +192,73 @@ def _cell(e: dict | None, top: str) -> str:
 
 
 def markdown(d: dict) -> str:
-    lines = ["# The palm's rounded border against the laws that carry it", "",
-             "`python tools/border_law_error.py --out reports/border-law-error`: the FE's nearest "
-             f"body to the palm's rounded border (the phalanx section widened to width "
+    lines = ["# The palm's rounded border against the laws that could carry it", "",
+             "`python tools/border_law_error.py --out reports/border-law-error --handshake`: the "
+             "FE's stand-in of the palm's rounded border (the phalanx section widened to width "
              f"{d['border']['width_mm']:g} mm, height {d['border']['height_mm']:g} mm: a "
              "12.5 mm top radius, the median border the partner's fingers press in the default "
-             f"handshake, `reports/contact-geometry.md`) under the finger ({d['finger']}), 3D, to "
-             "20 N, against the palm/finger law the scene's pair carries there and the "
-             "phalanx/finger law: RMS / largest difference in % of 2 N (mean signed: the law "
-             "above the FE is +), over the FE's 0-2 N and 0-20 N.", "",
+             f"handshake being 13.6 mm, `reports/contact-geometry.md`) under the finger "
+             f"({d['finger']}), 3D, to 20 N, against the border/finger law fitted to it (the "
+             "law the scene's border pairs carry), the palm/finger law (a finger across a flat "
+             "slab: what they carried before) and the phalanx/finger law: RMS / largest "
+             "difference in % of 2 N (mean signed: the law above the FE is +), over the FE's "
+             "0-2 N and 0-20 N.", "",
              machine_line(d["machine"]), "",
-             "| design | FE d(2 N) mm | palm/finger law, 0-2 N | 0-20 N | law's force at the "
-             "FE's 2 N depth | phalanx/finger law, 0-2 N | 0-20 N |",
-             "|---|---|---|---|---|---|---|"]
+             "| design | FE d(2 N) mm | border/finger law, 0-2 N | 0-20 N | palm/finger law, "
+             "0-2 N | 0-20 N | palm/finger law's force at the FE's 2 N depth | phalanx/finger "
+             "law, 0-2 N | 0-20 N |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in d["rows"]:
         fe = r["fe"]
         if "error" in fe:
-            lines.append(f"| {r['design']} | FE stopped: {fe['error'][:80]} | | | | | |")
+            lines.append(f"| {r['design']} | FE stopped: {fe['error'][:80]} | | | | | | | |")
             continue
         e = r["errors"]
         pf = e["palm/finger"]
         at = "n/a" if pf is None else f"{pf['law_force_at_fe_2N_depth_N']:.2f} N"
-        lines.append(f"| {r['design']} | {fe['d_2N_mm']:.3f} | {_cell(pf, '2')} | "
+        lines.append(f"| {r['design']} | {fe['d_2N_mm']:.3f} | {_cell(e.get('border/finger'), '2')} | "
+                     f"{_cell(e.get('border/finger'), '20')} | {_cell(pf, '2')} | "
                      f"{_cell(pf, '20')} | {at} | {_cell(e['phalanx/finger'], '2')} | "
                      f"{_cell(e['phalanx/finger'], '20')} |")
-    lines += ["", "pocket2-sil with the border's radius moved (the same laws):", "",
-              "| border (width x height mm) | top radius mm | FE d(2 N) mm | palm/finger law, "
-              "0-2 N | phalanx/finger law, 0-2 N |", "|---|---|---|---|---|"]
-    for r in d["radii"]:
-        g, fe = r["geometry"], r["fe"]
+    lines += ["", "pocket2-sil with the border's radius moved and with the finger crossing it at "
+              "other angles than the law's 90 deg (the same laws):", "",
+              "| border (width x height mm) | top radius mm | crossing deg | FE d(2 N) mm | "
+              "border/finger law, 0-2 N | 0-20 N | palm/finger law, 0-2 N | phalanx/finger law, "
+              "0-2 N |", "|---|---|---|---|---|---|---|---|"]
+    cases = ([(r["geometry"], 90.0, r) for r in d["radii"]]
+             + [(d["border"], r["crossing_deg"], r) for r in d.get("crossings", [])])
+    for g, angle, r in cases:
+        fe = r["fe"]
         rad = (g["width_mm"] / 2) ** 2 / g["height_mm"]
+        head = f"| {g['width_mm']:g} x {g['height_mm']:g} | {rad:.1f} | {angle:g} |"
         if "error" in fe:
-            lines.append(f"| {g['width_mm']:g} x {g['height_mm']:g} | {rad:.1f} | FE stopped | | |")
+            lines.append(f"{head} FE stopped | | | | |")
             continue
-        lines.append(f"| {g['width_mm']:g} x {g['height_mm']:g} | {rad:.1f} | "
-                     f"{fe['d_2N_mm']:.3f} | {_cell(r['errors']['palm/finger'], '2')} | "
-                     f"{_cell(r['errors']['phalanx/finger'], '2')} |")
+        e = r["errors"]
+        lines.append(f"{head} {fe['d_2N_mm']:.3f} | {_cell(e.get('border/finger'), '2')} | "
+                     f"{_cell(e.get('border/finger'), '20')} | {_cell(e['palm/finger'], '2')} | "
+                     f"{_cell(e['phalanx/finger'], '2')} |")
     if d.get("handshakes"):
         regions = ("Palm1", "Palm2", "Back1", "Back2")
-        lines += ["", "What the palm's law does to the handshake (`--handshake`): the default run "
-                  "(neutral, pocket2-sil) as shipped and with every palm/finger pair given its "
-                  "skin's phalanx/finger pair law (a what-if, not a border law):", "",
+        lines += ["", "What the border's law does to the handshake (`--handshake`): the default "
+                  "run (neutral, pocket2-sil) as shipped and with the border's pairs on the "
+                  "palm/finger law, as before the border had a law; the share of the force "
+                  "through the border/finger law and through a skin law made for the contact's "
+                  "geometry (`force_accounting.by_geometry`, crossing within 15 deg of 90):", "",
                   "| seed | pairs | " + " | ".join(f"{r} peak N" for r in regions)
-                  + " | largest other region | over 2 N | force between the hands N s | deepest "
-                  "pair mm | bone on bone N |", "|---|---|" + "---|" * (len(regions) + 5)]
+                  + " | largest other region | over 2 N | force between the hands N s | through "
+                  "the border law % | skin law fits % | deepest pair mm | bone on bone N |",
+                  "|---|---|" + "---|" * (len(regions) + 7)]
         for h in d["handshakes"]:
             others = {k: v for k, v in h["peak_N"].items() if k not in regions}
             top = max(others, key=others.get)
             lines.append(f"| {h['seed']} | {h['what']} | "
                          + " | ".join(f"{h['peak_N'][r]:.1f}" for r in regions)
                          + f" | {top} {others[top]:.1f} | {', '.join(h['over_2N'])} | "
-                         f"{h['total_Ns']:.1f} | {h['deepest_pair_mm']:.1f} | "
-                         f"{h['bone_on_bone_peak_N']:.1f} |")
+                         f"{h['total_Ns']:.1f} | "
+                         f"{h['by_law_share_pct'].get('border/finger', 0.0):.1f} | "
+                         f"{h['skin_own_class_share_pct']:.1f} | "
+                         f"{h['deepest_pair_mm']:.1f} | {h['bone_on_bone_peak_N']:.1f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -60,8 +60,9 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
                    "completes).")
 @click.option("--class-laws-only", is_flag=True,
               help="Fit only the laws per contact class again (each file's pair_laws, from the "
-                   "class folders of --fe-dir: finger/, palm-plate/, palm-finger/), keeping the "
-                   "law and the representations of the files in --out. Designs only.")
+                   "class folders of --fe-dir: finger/, palm-plate/, palm-finger/, "
+                   "border-finger/), keeping the law and the representations of the files in "
+                   "--out. Designs only.")
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
 def calibrate(skins, representations, out_dir, fe_dir, threads, cluster, force, class_laws_only,
               as_json) -> None:

@@ -7,7 +7,9 @@ A winner of the design search is a phalanx defined by its variables and two libr
 * ``{fe}/``: the plate at 0.5 mm/s, then a 10 s hold (the law's elastic part and relaxation);
 * ``{fe}/speed-5``, ``{fe}/speed-2``: the same at 5 mm/s (fitted) and 2 mm/s (validation);
 * ``{fe}/finger``, ``{fe}/palm-plate``, ``{fe}/palm-finger``: the contact classes' curves
-  (`softhand.skin.contact_classes`), no hold.
+  (`softhand.skin.contact_classes`), no hold. Not the palm border's (``border-finger``: the
+  phalanx widened to 20 x 8 mm, where a searched pocket and roof need not fit): a winner's
+  border pairs carry its palm/finger law (`softhand.envs.skins.pair_choices`).
 
 Each is the shipped folders' 3D setting (`FE_SETTINGS`) with the candidate's geometry and its
 library constants in the FE's material slots (`softhand.design.evaluate.fe_design`), written by

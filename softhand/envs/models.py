@@ -19,6 +19,7 @@ import mujoco
 
 from softhand.envs.skins import palm_skin, parse_skins, write_skin_laws
 from softhand.hands import SceneConfig, scene_spec
+from softhand.hands.grasp import solve_grasp
 from softhand.hands.mjcf import mjcf_text, write_mjcf
 from softhand.io import atomic_write_text
 from softhand.skin.files import SKINS_DIR
@@ -37,7 +38,8 @@ def skinned_scene_spec(skins: Mapping[str, str] | None = None, config: SceneConf
     """The handshake scene with every skin, pair and law (default skins and representations:
     `parse_skins`; ``contact_laws``: `softhand.envs.skins.CONTACT_LAWS`). The palm's skin is
     one surface, or its quarters where the palm's zones ride relaxation pads (`palm_skin`,
-    whatever ``config.prosthetic.palm`` says)."""
+    whatever ``config.prosthetic.palm`` says). The pairs whose finger the scene's grasp puts on
+    a rounded palm border take the border's law (`softhand.envs.skins.border_pairs`)."""
     if skins is None:
         skins, default_reps = parse_skins()
         representations = representations or default_reps
@@ -47,7 +49,7 @@ def skinned_scene_spec(skins: Mapping[str, str] | None = None, config: SceneConf
         config = replace(config, prosthetic=replace(config.prosthetic, palm=palm))
     spec = scene_spec(config)
     write_skin_laws(spec, skins, representations, directory=directory,
-                    contact_laws=contact_laws)
+                    contact_laws=contact_laws, grasp=solve_grasp(config))
     return spec
 
 

@@ -30,6 +30,7 @@ from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
 from softhand.skin.contact_classes import PLATE_CLASS, classify
 from softhand.skin.files import SKINS_DIR, load_calibration
+from softhand.skin.local_geometry import LocalGeometry
 from softhand.skin.representations import (
     REPRESENTATIONS,
     HandPad,
@@ -41,6 +42,8 @@ from softhand.skin.soft_contact import SoftContactParams
 from softhand.validate import show
 
 __all__ = [
+    "BORDER_PAIRS_TEXT",
+    "BORDER_REACH_M",
     "CONTACT_LAWS",
     "DEFAULT_DESIGN",
     "DEFAULT_REPRESENTATION",
@@ -51,6 +54,7 @@ __all__ = [
     "CalibratedRangeWarning",
     "PairChoice",
     "add_skin_pairs",
+    "border_pairs",
     "calibrated_max_force",
     "check_contact_laws",
     "check_pad_timestep",
@@ -325,13 +329,60 @@ def check_contact_laws(value: str) -> str:
     return value
 
 
+#: a partner geom this close to the palm's skin at the grasp (m) is placed where it is nearest:
+#: the grasp presses the hands 0.5-1.5 mm into each other, and a finger a few millimetres off
+#: the palm there meets it where it is nearest once the grip closes
+BORDER_REACH_M = 0.005
+#: the name of the scene's custom text that lists the pairs whose finger the grasp puts on a
+#: rounded palm border (space-separated pair names; absent: none): the MJCF carries the choice
+BORDER_PAIRS_TEXT = "softhand_border_pairs"
+
+
+def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[str, ...]:
+    """The skin pairs of class ``palm/finger`` (a palm's skin and a finger) whose two geoms,
+    at the state in ``data`` (the handshake's grasp: `softhand.hands.grasp.set_grasp_state`),
+    are within `BORDER_REACH_M` and nearest where the palm's surface is a rounded border
+    (`softhand.skin.local_geometry`: the hull's normals within 6 mm spread over 15 deg), not
+    its flat face: the pairs that take the ``border/finger`` law.
+
+    A pair's law is one for its whole episode, so where its finger lies at the grasp decides;
+    a finger that slides from the border onto the face, or the other way, keeps the law of
+    where it began (the run's geometry accounting measures the force that did).
+    """
+    local = LocalGeometry(model)
+    fromto = np.zeros(6)
+    out = []
+    for pid in range(model.npair):
+        g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
+        if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
+            g1, g2 = g2, g1
+        if classify(model, g1, g2) != "palm/finger":
+            continue
+        dist = mujoco.mj_geomDistance(model, data, g1, g2, BORDER_REACH_M, fromto)
+        if dist < BORDER_REACH_M and local.shape(data, g1, fromto[:3]).kind == "border":
+            out.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid))
+    return tuple(out)
+
+
+def _recorded_border_pairs(model: mujoco.MjModel) -> frozenset[str]:
+    """The pair names of the model's `BORDER_PAIRS_TEXT` (empty when it has none)."""
+    tid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, BORDER_PAIRS_TEXT)
+    if tid < 0:
+        return frozenset()
+    adr, size = int(model.text_adr[tid]), int(model.text_size[tid])
+    return frozenset(bytes(model.text_data[adr:adr + size]).rstrip(b"\0").decode().split())
+
+
 @dataclass(frozen=True)
 class PairChoice:
     """The law one skin pair carries, and why.
 
     Attributes:
-        contact: the pair's contact class from its two geoms (``body/counterpart``).
-        law: the law it carries: the class (``phalanx/finger``...), ``plate`` (the paper's
+        contact: the pair's contact class (``body/counterpart``): from its two geoms, and
+            ``border/finger`` where the grasp puts the finger on a rounded palm border
+            (`border_pairs`).
+        law: the law it carries: the class (``phalanx/finger``...; ``palm/finger`` on a border
+            where the skin has no ``border/finger`` law), ``plate`` (the paper's
             protocol, by choice), ``plate (no CLASS law)`` (the skin has no law of its class),
             ``tissue`` (a ``rigid`` region: the tissue's law alone) or ``plate pad`` (a
             relaxation pad: the skin's plate law on the pad, the tissue's law in the pair).
@@ -351,10 +402,12 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
                  contact_laws: str = "geometry") -> dict[str, PairChoice]:
     """The law of every skin pair of ``model`` (pairs named by `add_skin_pairs`): the one
     place that decides which law a pair takes (the scene's spec, its force ranges and its
-    accounting all read it)."""
+    accounting all read it). A pair is of class ``border/finger`` when the model's
+    `BORDER_PAIRS_TEXT` lists it (`write_skin_laws` records `border_pairs` at the grasp)."""
     check_contact_laws(contact_laws)
     reps = dict(representations or {})
     tissue = series_law("rigid", str(directory))
+    borders = _recorded_border_pairs(model)
     out = {}
     for pid in range(model.npair):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
@@ -365,14 +418,19 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
         g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
         if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
             g1, g2 = g2, g1
-        contact = classify(model, g1, g2)
+        contact = "border/finger" if name in borders else classify(model, g1, g2)
         if skin == "rigid":
             out[name] = PairChoice(contact, "tissue", tissue, float(DATA_MAX_N[HUMAN]))
             continue
         cal = _calibration(skin, str(directory))
         by_class = cal.pair_laws.get(contact) if contact_laws == "geometry" else None
+        if by_class is None and contact == "border/finger" and contact_laws == "geometry":
+            # no FE curve of the border for this skin (a search's winner): the palm's own law
+            by_class, contact_law = cal.pair_laws.get("palm/finger"), "palm/finger"
+        else:
+            contact_law = contact
         if by_class is not None:
-            law, params, top = contact, by_class.pair.params, by_class.pair.calibrated_max_N
+            law, params, top = contact_law, by_class.pair.params, by_class.pair.calibrated_max_N
         else:
             law = "plate" if contact_laws == "plate" or contact == PLATE_CLASS else \
                 f"plate (no {contact} law)"
@@ -388,13 +446,16 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                     representations: Mapping[str, str] | None = None, *,
                     directory: str | Path = SKINS_DIR, pro: str = "pro_",
                     hand_pad: HandPad | None = None,
-                    contact_laws: str = "geometry") -> list[str]:
+                    contact_laws: str = "geometry", grasp=None) -> list[str]:
     """Put each region's skin on the hand and add the skin pairs (`add_skin_pairs`) with
     their laws in ``solref``/``solimp`` (a non-sensing skin: its region's design and
     representation; default representation ``soft-contact``).
 
     Each pair's law is chosen by `pair_choices` (``contact_laws``: by the pair's contact
-    geometry, or the plate law everywhere). Each representation goes through its class
+    geometry, or the plate law everywhere). With ``grasp`` (`softhand.hands.grasp.Grasp` of
+    the scene), the pairs whose finger it puts on a rounded palm border (`border_pairs`) are
+    recorded in the spec (`BORDER_PAIRS_TEXT`) and take the border's law. Each representation
+    goes through its class
     (`softhand.skin.representations`):
     ``soft-contact`` leaves the geom as it is and gives its pairs the skin-and-tissue pair law;
     ``soft-contact+relaxation`` moves the geom onto a relaxation pad along its outward normal
@@ -420,6 +481,15 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                         outward=OUTWARD.get(key, PALMAR), hand_pad=hand_pad)
     names = add_skin_pairs(spec, pro=pro)
     model = spec.compile()
+    if grasp is not None and contact_laws == "geometry":
+        from softhand.hands.grasp import set_grasp_state
+
+        at = mujoco.MjData(model)
+        set_grasp_state(model, at, grasp)
+        borders = border_pairs(model, at)
+        if borders:
+            spec.add_text(name=BORDER_PAIRS_TEXT, data=" ".join(borders))
+            model = spec.compile()
     choices = pair_choices(model, skins, reps, directory=directory, contact_laws=contact_laws)
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
     data = mujoco.MjData(model)  # qpos0, for every pair's mobility

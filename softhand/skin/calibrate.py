@@ -47,7 +47,9 @@ from softhand.laws.fit import (
 )
 from softhand.laws.references import DATA_MAX_N, HUMAN, TABLE_MAX_N, reference_law
 from softhand.skin.contact_classes import (
+    BORDER_GEOMETRY,
     CLASSES,
+    FE_BODY,
     INDENTERS,
     PLATE_CLASS,
     TISSUE_REFERENCE_DESIGN,
@@ -593,16 +595,24 @@ def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict |
         raise ValueError(f"{path}: its folder has no summary.json: class curves must come from "
                          "`softhand fe sweep`")
     got = summary["provenance"]["settings"]
-    want = INDENTERS[key.split("/")[1]]
-    if got.get("indenter", "plate") != want or got.get("body", "phalanx") != key.split("/")[0]:
+    body = key.split("/")[0]
+    want, want_body = INDENTERS[key.split("/")[1]], FE_BODY[body]
+    if got.get("indenter", "plate") != want or got.get("body", "phalanx") != want_body:
         raise ValueError(f"{path.parent}: holds curves of indenter {got.get('indenter')!r} on "
                          f"body {got.get('body', 'phalanx')!r}; class {key} needs {want!r} on "
-                         f"{key.split('/')[0]!r}")
+                         f"{want_body!r}")
+    base = plate["provenance"]["settings"] if plate is not None else {}
+    if body == "border":  # the phalanx widened to the border's stand-in, over the plate's own
+        geometry = {**base.get("geometry", {}), **BORDER_GEOMETRY}
+        if got.get("geometry", {}) != geometry:
+            raise ValueError(f"{path.parent}: geometry {got.get('geometry', {})!r}; class {key} "
+                             f"needs {geometry!r} (contact_classes.BORDER_GEOMETRY)")
     if plate is not None:
         ignore = {"indenter", "body", "hold_s", "threads", "max_depth_mm"}
-        if key.split("/")[0] != "phalanx":
+        if body != "phalanx":
             ignore.add("mesh")  # another body: its own mesh levels (recorded with the curve)
-        base = plate["provenance"]["settings"]
+        if body == "border":
+            ignore.add("geometry")  # checked above
         diff = [f"{k} {base[k]!r} (plate) vs {got[k]!r}" for k in sorted(base)
                 if k not in ignore and k in got and base[k] != got[k]]
         if diff:

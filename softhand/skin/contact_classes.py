@@ -12,10 +12,22 @@ phalanx (the FE; Hertz and elastic-foundation estimates 0.33-0.8x, Johnson, Cont
 * **counterpart**, what presses the skin: ``finger`` for a round geom of radius at most
   `FINGER_MAX_RADIUS_MM`, ``flat`` otherwise.
 
-The four classes ``body/counterpart`` have their FE curves in folders of the FE root
+The classes ``body/counterpart`` have their FE curves in folders of the FE root
 (`FE_FOLDERS`): the paper's plate on the phalanx (the root itself), a cylinder of radius
-`FINGER_RADIUS_MM` across the phalanx (``finger/``), and the palm model of
-`softhand.fem.palm` under the plate and the cylinder (``palm-plate/``, ``palm-finger/``).
+`FINGER_RADIUS_MM` across the phalanx (``finger/``), the palm model of
+`softhand.fem.palm` under the plate and the cylinder (``palm-plate/``, ``palm-finger/``), and
+the same cylinder across a rounded palm border (``border-finger/``, class ``border/finger``).
+
+* **border**: where a partner's finger wraps the convex palm's rounded border (between its
+  palmar face and the back: 94 % of the default handshake's force, radius 8-23 mm, median 13.6,
+  `reports/contact-geometry.md`), neither the phalanx's section (16 x 9 mm) nor the palm's flat
+  slab is pressed. The FE has no body of the palm's own section; its nearest is the phalanx
+  section widened to `BORDER_GEOMETRY` (20 x 8 mm, a half ellipse: 12.5 mm radius at its top,
+  the median border's within 1.1 mm; the design's layers and pocket as on the phalanx, over a
+  flat bone), pressed by the same finger across it: a stated stand-in, whose radius moved to
+  13.0 and 11.1 mm changes pocket2-sil's depth at 2 N by -2 % and +7 %
+  (`reports/border-law-error.md`). A pair's body is a border when the handshake's grasp puts
+  the finger on the border (`softhand.envs.skins.border_pairs`), not from the geoms' types.
 A class's skin law keeps the plate law's relaxation (quasi-linear viscoelasticity: the
 relaxation function is the material's, the elastic law the shape's) and fits its own elastic law
 to the class's FE ramp (`fit_class_law`).
@@ -42,14 +54,16 @@ import numpy as np
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
-__all__ = ["BODIES", "CLASSES", "COUNTERPARTS", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM",
+__all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM",
            "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_REFERENCE_DESIGN",
            "class_curve", "classify", "fit_class_law", "geom_shape", "shape_ratio",
            "tissue_class_law", "tissue_counterpart"]
 
-BODIES = ("phalanx", "palm")
+BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
-CLASSES = tuple(f"{b}/{c}" for b in BODIES for c in COUNTERPARTS)
+#: every class with FE curves: each body under each counterpart, but the border (a palm's rounded
+#: edge, pressed by fingers that wrap it: no flat presses a border alone)
+CLASSES = ("phalanx/flat", "phalanx/finger", "palm/flat", "palm/finger", "border/finger")
 #: the paper's protocol: the class every skin has (the plate on the phalanx)
 PLATE_CLASS = "phalanx/flat"
 #: the finger counterpart's radius in the FE: the middle of the partner population's finger
@@ -61,7 +75,12 @@ FINGER_MAX_RADIUS_MM = 15.0
 INDENTERS = {"flat": "plate", "finger": f"cylinder:{FINGER_RADIUS_MM:g}@90"}
 #: each class's FE folder under the FE root ("" = the root: the paper's plate on the phalanx)
 FE_FOLDERS = {"phalanx/flat": "", "phalanx/finger": "finger", "palm/flat": "palm-plate",
-              "palm/finger": "palm-finger"}
+              "palm/finger": "palm-finger", "border/finger": "border-finger"}
+#: the FE body (`softhand.fem.solver.IndentationSettings.body`) of each class's body
+FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
+#: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
+#: palm's rounded border (module docstring)
+BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0}
 #: the design whose FE shape factor stands in for the human tissue's (module docstring)
 TISSUE_REFERENCE_DESIGN = "solid-sil"
 _ROUND = {int(mujoco.mjtGeom.mjGEOM_CAPSULE), int(mujoco.mjtGeom.mjGEOM_CYLINDER),
@@ -93,8 +112,9 @@ def classify(model: mujoco.MjModel, skin_geom: int, other_geom: int) -> str:
 
 def tissue_counterpart(key: str) -> str:
     """What presses the tissue in a pair of class ``key``: the skin's body (a phalanx presses
-    like a finger, a palm like a flat)."""
-    return "finger" if key.split("/")[0] == "phalanx" else "flat"
+    like a finger, and a rounded palm border, of a finger's radius, too; a palm face like a
+    flat)."""
+    return "flat" if key.split("/")[0] == "palm" else "finger"
 
 
 def class_curve(design: str, key: str, fe_root: str | Path) -> Path:

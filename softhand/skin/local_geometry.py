@@ -23,8 +23,11 @@ the shapes at its point (issue 36):
 `contact_class` names the class of a law's body pressed by its counterpart, with the crossing
 angle of two axes (0 deg: parallel, 90: across). `law_fits` says whether a law was made for that
 class: the law's body and counterpart must be the contact's, and a finger law (the FE's cylinder
-at 90 deg) counts within `CROSSING_TOLERANCE_DEG` of 90 deg, a named tolerance until there are FE
-curves per crossing angle. A rounded border has no law of its own yet: no law fits it.
+at 90 deg, across a phalanx or a border) counts within `CROSSING_TOLERANCE_DEG` of 90 deg, a
+named tolerance until there are FE curves per crossing angle. A rounded palm border has the
+``border/finger`` law (`softhand.skin.contact_classes`: the FE's stand-in of a 12.5 mm
+border); what presses the tissue with a border has no law of its own (the tissue's finger law
+carries it, and the accounting says so).
 
 Units: MuJoCo's (m) in, mm and deg out.
 """
@@ -256,7 +259,7 @@ def law_classes(label: str) -> tuple[str, str]:
     class law and the tissue's law for what the skin's body presses it with; the plate law
     (``plate``, ``plate (no ... law)``, ``plate pad``) and the tissue's plate law; ``tissue``
     (a rigid region): the tissue's plate law on both sides of the account."""
-    if label.startswith("phalanx/") or label.startswith("palm/"):
+    if label.split("/")[0] in ("phalanx", "palm", "border"):
         return label, f"phalanx/{tissue_counterpart(label)}"
     return "phalanx/flat", "phalanx/flat"
 
@@ -264,13 +267,14 @@ def law_classes(label: str) -> tuple[str, str]:
 def law_fits(law: str, body: str, counterpart: str, crossing: float | None) -> bool:
     """Whether a law of class ``law`` (``phalanx/finger``...) was made for a contact of
     `contact_class` (body, counterpart, crossing): the same body (``palm`` is a palm face) and
-    counterpart, and a finger on a phalanx within `CROSSING_TOLERANCE_DEG` of 90 deg."""
+    counterpart, and a finger on a phalanx or a border within `CROSSING_TOLERANCE_DEG` of
+    90 deg."""
     law_body, law_counterpart = law.split("/")
-    if body != ("phalanx" if law_body == "phalanx" else "palm face"):
+    if body != {"phalanx": "phalanx", "palm": "palm face", "border": "palm border"}[law_body]:
         return False
     if counterpart != law_counterpart:
         return False
-    if law == "phalanx/finger" and crossing is not None:
+    if law_counterpart == "finger" and law_body != "palm" and crossing is not None:
         return crossing >= 90.0 - CROSSING_TOLERANCE_DEG
     return True
 
