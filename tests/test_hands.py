@@ -165,8 +165,53 @@ def test_bones_collide_only_with_the_other_hand(scene):
         assert not any(collide(a, b) for b in geoms["pro_bone_"])
     for b in geoms["hum_bone_"]:
         assert not any(collide(b, c) for c in geoms["hum_bone_"])
-    for g in geoms["pro_skin_"] + geoms["hum_tissue_"]:
+    for g in geoms["pro_skin_"]:
         assert model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0
+    # the partner's thumb touches its own fingers' phalanges (not through them), and nothing
+    # else collides outside the explicit pairs: not thumb with thumb, finger with finger, the
+    # palm or the forearm, either hand's bones or the sensored hand's skin
+    thumb = [g for g in geoms["hum_tissue_"] if "_thumb_" in model.geom(g).name]
+    phalanges = [g for g in geoms["hum_tissue_"] if model.geom(g).name.split("_")[-1]
+                 in ("proximal", "middle", "distal") and g not in thumb]
+    assert len(thumb) == 3 and len(phalanges) == 12
+    everything = range(model.ngeom)
+    for g in thumb:
+        assert {c for c in everything if collide(g, c)} == set(phalanges)
+    for g in phalanges:
+        assert {c for c in everything if collide(g, c)} == set(thumb)
+    for g in set(geoms["hum_tissue_"]) - set(thumb) - set(phalanges):
+        assert model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0
+
+
+def test_the_partner_feels_the_other_hand_not_its_own_thumb(scene):
+    """The partner's thumb pressed into its own middle fingertip makes a contact with force
+    (it does not pass through), and the feel sensors that its grip regulates on do not count it:
+    they match contacts with the sensored hand only."""
+    spec = mujoco.MjSpec.from_string(scene[0].to_xml())
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    thumb, middle = model.geom("hum_tissue_thumb_distal"), model.geom("hum_tissue_middle_distal")
+    body = thumb.bodyid[0]
+    # move the thumb's tissue (in its body's frame) onto the middle fingertip, 1 mm into it
+    target = data.geom_xpos[middle.id] + data.geom_xmat[middle.id].reshape(3, 3)[:, 0] * (
+        model.geom_size[middle.id, 0] + model.geom_size[thumb.id, 0] - 0.001)
+    shift = data.xmat[body].reshape(3, 3).T @ (target - data.geom_xpos[thumb.id])
+    g = spec.geom("hum_tissue_thumb_distal")
+    g.pos = np.asarray(g.pos) + shift  # the MJCF places it by pos and quat
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    pairs = {(int(c.geom1), int(c.geom2)) for c in data.contact[:data.ncon]}
+    assert (thumb.id, middle.id) in pairs or (middle.id, thumb.id) in pairs
+    i = next(i for i, c in enumerate(data.contact[:data.ncon])
+             if {int(c.geom1), int(c.geom2)} == {thumb.id, middle.id})
+    force = np.zeros(6)
+    mujoco.mj_contactForce(model, data, i, force)
+    assert force[0] > 0.0
+    for name in ("hum_feel_thumb_distal", "hum_feel_middle_distal"):
+        s = model.sensor(name)
+        assert np.all(data.sensordata[s.adr[0]:s.adr[0] + s.dim[0]] == 0.0), name
 
 
 def test_partner_tissues_listed(scene):

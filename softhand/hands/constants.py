@@ -224,6 +224,12 @@ HAND_MASS_FRACTION = 0.006  # [Winter09] Table 4.1
 
 #: (contype, conaffinity) of bone geoms. Skins and tissues use (0, 0): contact only through <pair>.
 BONE_BITS = MappingProxyType({"prosthetic": (1, 2), "partner": (2, 1)})
+#: (contype, conaffinity) of the partner's thumb tissues and of its fingers' phalanx tissues: a
+#: hand's thumb does not pass through its own fingers, so they touch through MuJoCo's own
+#: contacts (bits no other geom uses: thumb with fingers only, not thumb with thumb nor finger
+#: with finger, nor with either hand's bones). Without it the partner's thumb tip passed 6 mm
+#: into its middle fingertip while its grip closed round the prosthetic palm's border.
+PARTNER_SELF_BITS = MappingProxyType({"thumb": (4, 8), "finger": (8, 4)})
 
 # --------------------------------------------------------------------------------------------------
 # Commercial multi-articulating prosthetic hand (i-Limb / bebionic class)

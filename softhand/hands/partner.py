@@ -14,8 +14,10 @@ regulated to the sampled grip force) while it holds the other hand. A servo's st
 PartnerConfig.finger_kp_nm_per_rad x JOINT_KP_SHARE of its joint; torques are capped at the
 maximal grip force shared by four fingers acting at the proximal phalanx ([Mathiowetz85]).
 
-Contact geoms: ``tissue_{piece}`` (contype = conaffinity = 0: contacts only through explicit
-``<pair>`` elements): the hand's soft envelope as one layer of convex pieces
+Contact geoms: ``tissue_{piece}`` (contacts with the other hand only through explicit
+``<pair>`` elements; the thumb's and the fingers' phalanx tissues also touch each other, through
+MuJoCo's own contacts, `constants.PARTNER_SELF_BITS`, with its default soft contact, so that the
+thumb does not pass through the fingers): the hand's soft envelope as one layer of convex pieces
 (`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
 on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull as one piece,
 ``tissue_palm`` (palmar and dorsal sides and borders: the grasp's fingers wrap the ulnar border,
@@ -26,8 +28,9 @@ skin's thickness of soft tissue, taken as the hand's: assumption, no forearm ind
 used), so that a sensored finger meeting the partner's wrist meets tissue, not a bare bone; the
 grasp's targets leave it out (softhand.hands.grasp sees the hand's pieces only).
 List them with partner_tissue_geoms(). Each has a contact sensor ``feel_{piece}`` on its contacts
-(one net-force slot: found, force xyz in the world frame): what the partner feels there, whatever
-touches it. Rigid bones (``bone_*``) collide with the prosthetic bones.
+(one net-force slot: found, force xyz in the world frame): what the partner feels there (the
+scene narrows it to the other hand's contacts, `softhand.hands.scene`: its own thumb on its
+fingers is not the grip it regulates). Rigid bones (``bone_*``) collide with the prosthetic bones.
 """
 
 from __future__ import annotations
@@ -74,6 +77,13 @@ TISSUE_SEGMENTS: tuple[str, ...] = (
     "thumb_distal",
     *(f"{f}_{seg}" for f in const.FINGERS for seg in ("proximal", "middle", "distal")),
 )
+#: solref (time constant s, damping ratio) of the thumb's contacts with the fingers
+#: (`constants.PARTNER_SELF_BITS`): MuJoCo's default 20 ms, scaled by a phalanx's small inertia,
+#: let the grip's servos push the thumb tip 3.9 mm into the middle fingertip; 4 ms, two steps of
+#: the handshake's 2 ms (the stiffest MuJoCo integrates there: it clamps shorter ones to two
+#: steps), holds it to 0.7-0.9 mm (seeds 0, 1, 4). A stop, not the tissues' law: what the
+#: partner's thumb presses on its own fingers is not part of the study.
+SELF_SOLREF: tuple[float, float] = (0.004, 1.0)
 
 #: The forearm's tissue (a capsule over the forearm stub's bone, module docstring): a tissue geom
 #: of the scene, not a piece of the hand's envelope.
@@ -198,8 +208,13 @@ def add_partner_hand(
         raise RuntimeError(f"tissue pieces {sorted(pieces)} do not match {TISSUE_SEGMENTS}")
     for name in TISSUE_SEGMENTS:
         piece = pieces[name]
-        add_piece(spec, skel.bodies[piece.body], piece, f"{prefix}tissue_{name}", contype=0,
-                  conaffinity=0, mass=0.0, group=2, rgba=list(_TISSUE_RGBA))
+        digit, _, segment = name.partition("_")
+        bits = (const.PARTNER_SELF_BITS["thumb"] if digit == "thumb" else
+                const.PARTNER_SELF_BITS["finger"]
+                if segment in ("proximal", "middle", "distal") else (0, 0))
+        add_piece(spec, skel.bodies[piece.body], piece, f"{prefix}tissue_{name}", contype=bits[0],
+                  conaffinity=bits[1], mass=0.0, group=2, rgba=list(_TISSUE_RGBA),
+                  solref=list(SELF_SOLREF))
         add_contact_sensor(spec, f"{prefix}feel_{name}", f"{prefix}tissue_{name}", netforce=True)
 
     # Joint impedance: one position servo per digit joint (ctrl = the joint's target angle), of

@@ -172,6 +172,11 @@ def scene_spec(config: SceneConfig | None = None, *,
     arm.add_geom(name="hum_arm_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.02, 0, 0],
                  mass=config.partner_arm.mass_kg, contype=0, conaffinity=0, group=4)
     add_partner_hand(spec, arm, config.partner, "hum_")
+    # what the partner feels is the other hand: its feel sensors match contacts with the sensored
+    # hand's subtree only, not its own thumb on its fingers (constants.PARTNER_SELF_BITS)
+    for sensor in spec.sensors:
+        if sensor.name.startswith("hum_feel_"):
+            sensor.reftype, sensor.refname = mujoco.mjtObj.mjOBJ_XBODY, "pro_wrist"
     for body in spec.bodies:
         if body.name.startswith(("hum_", "pro_")):
             body.gravcomp = 1.0  # each arm carries its hand's weight
