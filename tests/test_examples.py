@@ -86,13 +86,13 @@ def test_handshake_sensors_example(capsys):
     """Fed the pocket floor's sensors, the neutral controller's index finger presses harder than
     on the true forces: it feels the partner only once the pocket has closed and the reading
     passed the sensor's threshold (measured, pocket2-sil, seed 0, index / middle during the
-    shake: 0.35 / 0.15 N against 0.24 / 0.17 N with the palm border's own law, where the
+    shake: 0.28 / 0.12 N against 0.22 / 0.16 N with the palm border's own law, where the
     partner's hand gives more under the palm and the middle finger meets less of it; 0.40 / 0.15
     against 0.17 / 0.13 N on the palm's law; 0.79 / 0.78 against 0.35 / 0.41 N when the palm was
     four skins); the sensor on Palm1 reads over 1 N."""
     out = _load("handshake_sensors").main()
     contact, floor = out["contact"], out["sensor on the pocket floor"]
-    assert floor["Index"] > contact["Index"] + 0.05
+    assert floor["Index"] > contact["Index"] + 0.03
     assert floor["Index"] + floor["Middle"] > contact["Index"] + contact["Middle"]
     assert out["sensor under the outer layer"]["Palm1 reading"] > 1.0
     text = capsys.readouterr().out
@@ -103,7 +103,7 @@ def test_hold_2n_example(capsys):
     """A proportional controller written from the quickstart alone, on the load estimates
     (observe="load"), holds 2 N on each finger's middle phalanx during the shake. Measured
     (pocket2-sil, seed 0) with the palm border's own law: means 1.95 (Index2), 1.75, 1.79 and
-    1.82 N (Little2), each within 0.5 N of 2 N for 72-86 % of the shake, peaks 2.4-3.2 N: the
+    1.83 N (Little2), each within 0.5 N of 2 N for 75-90 % of the shake, peaks 2.4-3.1 N: the
     partner's 4 Hz shake moves the sensored hand through the contacts, and the softer border
     lets the partner's hand give more under the palm (on the palm's stiffer law before: Index2
     within 0.5 N all the time, peaks under 3 N; on the fixed hand before the arms: 2.00-2.04 N)."""

@@ -330,11 +330,15 @@ def check_contact_laws(value: str) -> str:
 
 
 #: a partner geom this close to the palm's skin at the grasp (m) is placed where it is nearest:
-#: the grasp presses the hands 0.5-1.5 mm into each other, and the fingertips, 5-14 mm off the
-#: palm there (default hands), close onto it where they are nearest, round its ulnar border. With
-#: 5 mm the fingertips' pairs kept the palm/finger law and carried 12 % of the default run's
-#: force on the border; with 30 mm none is left on it (seed 0)
-BORDER_REACH_M = 0.03
+#: the grasp presses the hands 0.5-1.5 mm into each other, and a finger a few millimetres off the
+#: palm there meets it where it is nearest once the grip closes. The fingertips lie 5-14 mm off
+#: the palm at the grasp (default hands) and keep the palm/finger law, though they close onto the
+#: border (12 % of the default run's force). A 30 mm reach gives them the border's law (89 % of
+#: the force through it, seeds 0-2), but the softer fingertips let the palms part 1.4 mm at
+#: mid-shake (the load-path criterion is 1 mm) and the grip of a 216 x 73 mm partner miss its
+#: target by 25 % (95th percentile; criterion 15 %): kept at 5 mm until the fingertips' contact is
+#: understood
+BORDER_REACH_M = 0.005
 #: the name of the scene's custom text that lists the pairs whose finger the grasp puts on a
 #: rounded palm border (space-separated pair names; absent: none): the MJCF carries the choice
 BORDER_PAIRS_TEXT = "softhand_border_pairs"
