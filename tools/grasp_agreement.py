@@ -93,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="rerun only the corners' handshakes into OUT.json (the grasps kept) and "
                         "rewrite OUT.md: what a change of the scene's physics moves there")
     a = p.parse_args(argv)
+    if a.handshakes_only and not a.out:
+        p.error("--handshakes-only rewrites an existing report: give its --out (e.g. "
+                "reports/grasp-agreement)")
     if a.handshakes_only:
         with open(a.out + ".json") as fh:
             rows = json.load(fh)

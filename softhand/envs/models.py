@@ -18,8 +18,7 @@ from pathlib import Path
 import mujoco
 
 from softhand.envs.skins import palm_skin, parse_skins, write_skin_laws
-from softhand.hands import SceneConfig, scene_spec
-from softhand.hands.grasp import solve_grasp
+from softhand.hands import SceneConfig, scene_spec, solve_grasp
 from softhand.hands.mjcf import mjcf_text, write_mjcf
 from softhand.io import atomic_write_text
 from softhand.skin.files import SKINS_DIR

@@ -344,6 +344,14 @@ BORDER_REACH_M = 0.005
 BORDER_PAIRS_TEXT = "softhand_border_pairs"
 
 
+def _skin_first(model: mujoco.MjModel, pid: int) -> tuple[int, int]:
+    """Pair ``pid``'s geoms, the prosthetic skin first (the compiler may swap a pair's order)."""
+    g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
+    if not (model.geom(g1).name or "").startswith("pro_skin_"):
+        g1, g2 = g2, g1
+    return g1, g2
+
+
 def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[str, ...]:
     """The skin pairs of class ``palm/finger`` (a palm's skin and a finger) whose two geoms,
     at the state in ``data`` (the handshake's grasp: `softhand.hands.grasp.set_grasp_state`),
@@ -359,9 +367,7 @@ def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[str, ...]:
     fromto = np.zeros(6)
     out = []
     for pid in range(model.npair):
-        g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
-        if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
-            g1, g2 = g2, g1
+        g1, g2 = _skin_first(model, pid)
         if classify(model, g1, g2) != "palm/finger":
             continue
         dist = mujoco.mj_geomDistance(model, data, g1, g2, BORDER_REACH_M, fromto)
@@ -421,9 +427,7 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
         region = SKIN_KEYS.get(key, key)
         rep = get_representation(skin_representation(
             key, reps.get(region, DEFAULT_REPRESENTATION)))
-        g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
-        if not (model.geom(g1).name or "").startswith("pro_skin_"):  # the compiler's order
-            g1, g2 = g2, g1
+        g1, g2 = _skin_first(model, pid)
         contact = "border/finger" if name in borders else classify(model, g1, g2)
         if skin == "rigid":
             out[name] = PairChoice(contact, "tissue", tissue, float(DATA_MAX_N[HUMAN]))

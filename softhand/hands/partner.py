@@ -16,8 +16,8 @@ maximal grip force shared by four fingers acting at the proximal phalanx ([Mathi
 
 Contact geoms: ``tissue_{piece}`` (contacts with the other hand only through explicit
 ``<pair>`` elements; the thumb's and the fingers' phalanx tissues also touch each other, through
-MuJoCo's own contacts, `constants.PARTNER_SELF_BITS`, with its default soft contact, so that the
-thumb does not pass through the fingers): the hand's soft envelope as one layer of convex pieces
+MuJoCo's own contacts, `constants.PARTNER_SELF_BITS`, with a stiff soft contact, `SELF_SOLREF`,
+so that the thumb does not pass through the fingers): the hand's soft envelope as one layer of convex pieces
 (`softhand.hands.envelope`, the same construction as the prosthetic's skin): a trimmed capsule
 on the thumb metacarpal (thenar) and on every phalanx, and the palm's convex hull as one piece,
 ``tissue_palm`` (palmar and dorsal sides and borders: the grasp's fingers wrap the ulnar border,

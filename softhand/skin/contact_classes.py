@@ -54,8 +54,8 @@ import numpy as np
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
-__all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM",
-           "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_REFERENCE_DESIGN",
+__all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS",
+           "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_REFERENCE_DESIGN",
            "class_curve", "classify", "fit_class_law", "geom_shape", "shape_ratio",
            "tissue_class_law", "tissue_counterpart"]
 
