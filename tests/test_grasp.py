@@ -158,12 +158,13 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", str(tmp_path))
     real_solve_starts = g._solve_starts
     config = SceneConfig()
-    solved = g.solve_grasp.__wrapped__(config)  # solves (an empty cache) and writes the entry
+    # solves (an empty cache) and writes the entry
+    solved = g._solve_grasp.__wrapped__(config, g.GRASP_SETTINGS)
     entries = list((tmp_path / "grasps").glob("*.json"))
     assert len(entries) == 1
     calls = []
     monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or pytest.fail("solved"))
-    read = g.solve_grasp.__wrapped__(config)
+    read = g._solve_grasp.__wrapped__(config, g.GRASP_SETTINGS)
     assert not calls
     for field in ("partner_pos_m", "partner_quat", "partner_q", "prosthetic_q"):
         assert np.array_equal(getattr(read, field), getattr(solved, field)), field
@@ -175,7 +176,7 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
     monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or (
         solved.cost, np.concatenate([np.zeros(6), solved.partner_q, solved.prosthetic_q]),
         list(solved.iterations)))
-    g.solve_grasp.__wrapped__(config)
+    g._solve_grasp.__wrapped__(config, g.GRASP_SETTINGS)
     assert len(calls) == 1  # the corrupt entry was solved again
     # finite but wrong numbers (its variables zeroed): their cost is not the entry's, so it is
     # solved again and the entry rewritten, not used
@@ -184,7 +185,7 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
     g._write_cached(entries[0], solved.cost, np.zeros_like(np.array(json.loads(
         entries[0].read_text())["x"])), list(solved.iterations))
     monkeypatch.setattr(g, "_solve_starts", lambda *a: calls.append(a) or real_solve_starts(*a))
-    again = g.solve_grasp.__wrapped__(config)
+    again = g._solve_grasp.__wrapped__(config, g.GRASP_SETTINGS)
     assert len(calls) == 2
     assert np.array_equal(again.partner_q, solved.partner_q)
     assert json.loads(entries[0].read_text())["x"] != [0.0] * len(again.partner_q)
@@ -200,12 +201,12 @@ def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
     differences', 1.9 % apart in cost; reports/grasp-agreement.md had 9 such pairs of hands of
     34); with the hops, finite differences (another solver of the same definition) land within
     the issue's 2 deg and 2 mm of the grasp (measured 0.0 deg, 0.0 mm)."""
-    from softhand.hands.grasp import _Problem, _solve_starts, _start_runs
+    from softhand.hands.grasp import _Problem, _solve_grasp, _solve_starts, _start_runs
 
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
     config = SceneConfig(partner=PartnerConfig(hand=HandConfig(
         hand_length_m=0.17419935230862254, hand_width_m=0.10135770156448491)))
-    grasp = solve_grasp.__wrapped__(config)
+    grasp = _solve_grasp.__wrapped__(config, GRASP_SETTINGS)
     problem = _Problem(config, GRASP_SETTINGS)
     costs = [cost for cost, _, _ in _start_runs(problem, GRASP_SETTINGS)]
     assert grasp.cost <= min(costs)
@@ -216,3 +217,26 @@ def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
     pos, _ = problem.pose(x_fd)
     assert joints < 2.0, f"largest joint difference {joints:.2f} deg"
     assert 1e3 * np.linalg.norm(pos - grasp.partner_pos_m) < 2.0
+
+
+@pytest.mark.slow
+def test_the_palm_alignment_weight_turns_the_partners_palm_parallel(monkeypatch):
+    """The grasp's palms-parallel target is weighted `GraspSettings.palm_align_weight`: at the
+    shipped 0.02 the default grasp rolls the partner's palm onto one edge of the prosthetic palm
+    (measured 14.5 deg; reports/palm-alignment.md), at 0.3 it holds them parallel (measured
+    0.6 deg) and still touching. `solve_grasp()` reads the module's `GRASP_SETTINGS` at the call
+    (tools/palm_alignment.py replaces it), never a grasp cached under other settings."""
+    import dataclasses
+
+    from softhand.hands import grasp as g
+
+    config = SceneConfig()
+    shipped = solve_grasp(config)
+    aligned = dataclasses.replace(GRASP_SETTINGS, palm_align_weight=0.3)
+    monkeypatch.setattr(g, "GRASP_SETTINGS", aligned)
+    parallel = solve_grasp(config)
+    assert parallel.settings == aligned and shipped.settings == GRASP_SETTINGS
+    assert shipped.metrics["palm_angle_deg"] > 10.0
+    assert parallel.metrics["palm_angle_deg"] < 2.0
+    assert -GRASP_SETTINGS.max_depth_m * 1e3 < parallel.metrics["palm_gap_mm"]["Palm"] < 0.0
+    assert parallel.cost < g.GOOD_COST_M2

@@ -139,12 +139,12 @@ os.environ['SOFTHAND_CACHE_DIR'] = '{tmp}/cache'
 from softhand.hands import grasp as g
 from softhand.hands.config import SceneConfig
 c = SceneConfig()
-solved = g.solve_grasp.__wrapped__(c)
+solved = g._solve_grasp.__wrapped__(c, g.GRASP_SETTINGS)
 path = g._cache_path(c, g.GRASP_SETTINGS)
 entry = json.loads(path.read_text())
 entry['x'] = [0.0] * len(entry['x'])
 path.write_text(json.dumps(entry))
-again = g.solve_grasp.__wrapped__(c)
+again = g._solve_grasp.__wrapped__(c, g.GRASP_SETTINGS)
 left = json.loads(path.read_text())['x']
 moved = float(np.max(np.abs(np.asarray(again.partner_q) - np.asarray(solved.partner_q))))
 print(('the grasp is the solved one' if moved == 0 else

@@ -18,7 +18,10 @@ A handshake is defined by its contacts, not by a clearance rule. Descriptions us
 Targets (residuals of a least-squares problem, lengths in m; `solve_grasp`):
 
 - palms: each prosthetic palmar piece (Palm1, Palm2) touches the partner's palmar tissue, pressed
-  ``press_m``; the two palm normals are opposite
+  ``press_m``; the two palm normals are opposite (weighted ``palm_align_weight``: at the shipped
+  0.02 the default grasp rolls the partner's palm 14.5 deg onto one edge of the prosthetic palm,
+  and the palms carry none of the handshake's force; reports/palm-alignment.md measures 0.1 and
+  0.3, which hold them parallel and pressed at the cost of the largest partners' grip)
 - web spaces: the two web points (radial border of the index metacarpal, half-way between the
   thumb's CMC and the index MCP) coincide in the plane of the palms
 - thumbs: each thumb's pad on the back of the other hand's index metacarpal (60 % of its length from
@@ -116,6 +119,15 @@ class GraspSettings:
         limit_margin_deg: the partner's joints stay this far inside their human range, so that no
             joint holds the grasp at its stop (a fist is a posture at the stops).
         max_iter: iterations per stage.
+        palm_align_weight: weight of the palms' parallelism target (its residual: the sum of the
+            two palm normals, about the angle between the palms in rad, times this; against
+            5 x each palm probe's distance in m, so 0.02 makes 14 deg of roll cost about as
+            much as 1 mm of press). At 0.02 (shipped) the default grasp rolls the partner's palm
+            14.5 deg onto one edge of the prosthetic palm and the palms carry 0.0 % of the force
+            (seeds 0-2); at 0.3 they stay parallel (0.6 deg), pressed 3 mm through the shake,
+            and carry 5.3-5.5 %, but the 216 mm partners reach their joint stops and the
+            216 x 107 mm one overshoots its grip by 17 % (the tests allow 15 %):
+            reports/palm-alignment.md, ``python tools/palm_alignment.py``.
     """
 
     press_m: float = 0.001
@@ -123,6 +135,7 @@ class GraspSettings:
     bone_clearance_m: float = 0.004
     limit_margin_deg: float = 10.0
     max_iter: int = 200
+    palm_align_weight: float = 0.02
 
 
 GRASP_SETTINGS = GraspSettings()
@@ -488,7 +501,8 @@ class _Problem:
                 None if k is None else 5.0 * k.distance(g, self.hum_palm, dist, witness)[None])
         z_pro = d.xmat[self.pro_palm_body].reshape(3, 3)[:, 2]
         z_hum = d.xmat[self.hum_palm_body].reshape(3, 3)[:, 2]
-        add(list(0.02 * (z_pro + z_hum)), None if k is None else 0.02 * (
+        w_align = self.s.palm_align_weight
+        add(list(w_align * (z_pro + z_hum)), None if k is None else w_align * (
             k.axis(self.pro_palm_body, z_pro) + k.axis(self.hum_palm_body, z_hum)))
         # web spaces: together in the plane of the prosthetic palm
         w_pro = self.hand_point(self.pro_palm_body, self.web_pro)
@@ -676,9 +690,8 @@ def _solve(problem: _Problem, x0: np.ndarray, contacts: bool, max_iter: int, *,
         xtol=1e-6, **jac)
 
 
-@functools.lru_cache(maxsize=64)
 def solve_grasp(config: SceneConfig | None = None,
-                settings: GraspSettings = GRASP_SETTINGS) -> Grasp:
+                settings: GraspSettings | None = None) -> Grasp:
     """Solve the handshake grasp of the scene's two hands (cached per config and settings, in
     this process and on disk: a solution in softhand.paths.cache_dir() is read back instead of
     solved, bit for bit the same; a population's partners, or a sweep over skins and controllers,
@@ -687,13 +700,21 @@ def solve_grasp(config: SceneConfig | None = None,
     Args:
         config: the scene (both hands' sizes, the prosthetic wrist pose, the starting crossing
             angle); default SceneConfig().
-        settings: weights and allowances.
+        settings: weights and allowances; None: the module's `GRASP_SETTINGS` as it is at the
+            call (an experiment may replace it, as tools/palm_alignment.py does: the cache key
+            holds the settings, so no other setting's grasp is read back).
 
     Returns:
         The grasp: the partner's pose and posture, the prosthetic's motor posture, and
         grasp_metrics() of the solution.
     """
-    config = config or SceneConfig()
+    return _solve_grasp(config or SceneConfig(), settings or GRASP_SETTINGS)
+
+
+@functools.lru_cache(maxsize=64)
+def _solve_grasp(config: SceneConfig, settings: GraspSettings) -> Grasp:
+    """`solve_grasp` of a given config and settings, cached in this process (its
+    ``__wrapped__`` reads and writes the disk cache only)."""
     problem = _Problem(config, settings)
     path = _cache_path(config, settings)
     known = _read_cached(path, problem.n)
@@ -895,7 +916,9 @@ def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
     """What a biomechanist checks in a handshake state (kinematics already computed):
 
     ``palm_gap_mm``: signed distance between the prosthetic palm's surface and the partner's
-    palm (negative: pressed), keyed ``Palm``; ``thumb_tip_in_other_mm``: each thumb's pad in the other hand's frame
+    palm (negative: pressed), keyed ``Palm``; ``palm_angle_deg``: the angle between the two palms
+    (between one palm's normal and the other's reversed; 0: facing each other, parallel);
+    ``thumb_tip_in_other_mm``: each thumb's pad in the other hand's frame
     (x distal, y radial, z dorsal; z > 0 is over the back); ``fingertip_z_in_other_mm``: each
     fingertip's height in the other hand's frame (z > 0: past its mid-plane, onto its back);
     ``self_penetration_mm``: the deepest overlap of two pieces of the same hand (thumb on fingers,
@@ -915,6 +938,9 @@ def grasp_metrics(model: mujoco.MjModel, data: mujoco.MjData, pro: HandLayout,
 
     out: dict = {
         "palm_gap_mm": {"Palm": 1e3 * gd("pro_skin_Palm", "hum_tissue_palm")},
+        "palm_angle_deg": math.degrees(math.acos(float(np.clip(
+            -data.xmat[model.body("pro_palm").id].reshape(3, 3)[:, 2]
+            @ data.xmat[model.body("hum_palm").id].reshape(3, 3)[:, 2], -1.0, 1.0)))),
         "thumb_tip_in_other_mm": {
             "partner_on_prosthetic": (1e3 * local("pro_palm", pad("hum_", "thumb", hum))).tolist(),
             "prosthetic_on_partner": (1e3 * local("hum_palm", pad("pro_", "thumb", pro))).tolist(),
