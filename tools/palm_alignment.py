@@ -77,13 +77,14 @@ def _corners() -> list[dict]:
     return rows
 
 
-def _agreement() -> list[dict]:
+def _agreement(weight: float) -> list[dict]:
     from grasp_agreement import agreement
 
     from softhand.envs.partner import partner_size_range
 
     sizes = partner_size_range()
-    return [agreement(length, width) for length in sizes["length"] for width in sizes["width"]]
+    return [agreement(length, width, weight) for length in sizes["length"]
+            for width in sizes["width"]]
 
 
 def measure(weight: float, seeds: list[int], say, with_agreement: bool = False) -> dict:
@@ -112,7 +113,7 @@ def measure(weight: float, seeds: list[int], say, with_agreement: bool = False) 
     say(f"weight {weight:g}: default run {row['default_run']}")
     row["corners"] = _corners()
     if with_agreement:
-        row["agreement"] = _agreement()
+        row["agreement"] = _agreement(weight)
         say(f"weight {weight:g}: agreement at the corners done")
     return row
 

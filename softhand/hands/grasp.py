@@ -128,8 +128,8 @@ class GraspSettings:
             and carry 5.3-5.5 %, but the 216 mm partners reach their joint stops and the
             216 x 107 mm one overshoots its grip by 17 % (the tests allow 15 %). At 0.1 the
             grasp has one answer at the four +-2.5 SD corners (other solvers within 1.6 deg and
-            0.2 mm; 37 deg at 0.02): reports/palm-alignment.md,
-            ``python tools/palm_alignment.py --agreement``.
+            0.2 mm; 37 deg at 0.02) but not for 6 of 30 sampled partners (none at 0.02):
+            reports/palm-alignment.md, reports/grasp-agreement-palms-0.1.md.
     """
 
     press_m: float = 0.001
