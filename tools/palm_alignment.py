@@ -35,6 +35,7 @@ import warnings
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))  # the audit and the agreement measure are tools beside this one
 
 
 def _default_run() -> dict:
@@ -88,11 +89,10 @@ def _agreement(weight: float) -> list[dict]:
 
 
 def measure(weight: float, seeds: list[int], say, with_agreement: bool = False) -> dict:
+    from load_path_audit import audit
+
     import softhand.hands.grasp as grasp_module
     from softhand.hands import SceneConfig
-
-    sys.path.insert(0, str(HERE))
-    from load_path_audit import audit
 
     grasp_module.GRASP_SETTINGS = dataclasses.replace(grasp_module.GraspSettings(),
                                                       palm_align_weight=weight)
@@ -198,8 +198,8 @@ def markdown(r: dict) -> str:
             + ", ".join(f"{x['partner_limit_margin_deg']:.1f}" for x in c) + " | "
             + ", ".join(f"{x['self_penetration_mm']:.2f}" for x in c) + " | "
             + ", ".join(f"{x['palm_to_palm_share_pct']:.1f}" for x in c) + " |")
-    corners = " x ".join("%g" for _ in range(2))
-    order = "; ".join(corners % tuple(x["partner_mm"]) for x in r["weights"][0]["corners"])
+    order = "; ".join(f"{a:g} x {b:g}" for a, b in (x["partner_mm"]
+                                                     for x in r["weights"][0]["corners"]))
     lines += ["", f"Corners in the order {order} mm.", ""]
     if all("agreement" in row for row in r["weights"]):
         lines += [
