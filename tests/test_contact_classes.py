@@ -15,6 +15,7 @@ from softhand.skin.contact_classes import (
     CLASSES,
     classify,
     geom_shape,
+    partner_tissue_class,
     shape_ratio,
     tissue_class_law,
     tissue_counterpart,
@@ -74,9 +75,10 @@ def test_a_fixed_relaxation_is_kept_and_the_elastic_law_refitted():
     assert err.max() < 0.02 * 2.0  # within 2 % of 2 N over the ramp
 
 
-def test_the_tissue_finger_law_is_the_plate_law_times_the_shape_ratio():
-    """The stated assumption, exactly: the tissue's finger law is its plate law times the
-    reference design's cylinder/plate ratio at the same depth (to the spline fit, 2 % of 2 N)."""
+def test_a_tissue_class_law_is_the_plate_law_times_the_tissue_fe_ratio():
+    """A tissue class law, exactly: the tissue's plate law times its FE's class/plate force
+    ratio at the same depth (to the spline fit, 2 % of 2 N); the plate class is the law
+    itself; the partner's side takes the finger or the plate class."""
     tissue = reference_law(HUMAN)
     d = np.linspace(0.0, 6.0, 200)
     plate = Curve(d / 0.5, d, 0.2 * d ** 2, np.zeros(d.size, bool), label="plate")
@@ -85,15 +87,19 @@ def test_the_tissue_finger_law_is_the_plate_law_times_the_shape_ratio():
     ratio = shape_ratio(plate, finger)
     assert ratio(2.0) == pytest.approx(0.6, rel=1e-3)
     assert ratio(0.1) == pytest.approx(ratio(0.25))  # held below the first trusted depth
-    law = tissue_class_law(tissue, "finger", plate, finger)
-    x = np.linspace(0.5, 5.0, 30)
-    want = tissue.elastic.force(x) * (0.5 + 0.05 * x)
-    assert np.abs(law.elastic.force(x) - want).max() < 0.02 * 2.0
-    assert tissue_class_law(tissue, "flat") is tissue
-    with pytest.raises(ValueError, match="counterpart = 'edge'"):
+    for key in ("phalanx/finger", "border/finger", "palm/flat"):
+        law = tissue_class_law(tissue, key, plate, finger)
+        x = np.linspace(0.5, 5.0, 30)
+        want = tissue.elastic.force(x) * (0.5 + 0.05 * x)
+        assert np.abs(law.elastic.force(x) - want).max() < 0.02 * 2.0
+        assert law.prony == tissue.prony
+    assert tissue_class_law(tissue, "phalanx/flat") is tissue
+    with pytest.raises(ValueError, match="class = 'edge'"):
         tissue_class_law(tissue, "edge")
-    with pytest.raises(ValueError, match="plate and finger FE curves"):
-        tissue_class_law(tissue, "finger")
+    with pytest.raises(ValueError, match="plate and palm/finger curves"):
+        tissue_class_law(tissue, "palm/finger")
+    assert [partner_tissue_class(k) for k in CLASSES] == [
+        "phalanx/finger", "phalanx/finger", "phalanx/flat", "phalanx/flat", "phalanx/finger"]
 
 
 @pytest.fixture(scope="module")
@@ -180,22 +186,24 @@ def test_class_laws_refit_alone_reproduce_the_shipped_ones_and_keep_the_rest(tmp
     from softhand.paths import SKINS_DIR
 
     shutil.copytree(SKINS_DIR, tmp_path / "skins")
-    res = CliRunner().invoke(main, ["calibrate", "pocket2-sil", "--class-laws-only", "--out",
-                                    str(tmp_path / "skins"), "--threads", "1", "--json"])
+    res = CliRunner().invoke(main, ["calibrate", "pocket2-sil", HUMAN, "--class-laws-only",
+                                    "--out", str(tmp_path / "skins"), "--threads", "1",
+                                    "--json"])
     assert res.exit_code == 0, res.output
-    old = json.loads((SKINS_DIR / "pocket2-sil.json").read_text(encoding="utf-8"))
-    new = json.loads((tmp_path / "skins" / "pocket2-sil.json").read_text(encoding="utf-8"))
-    assert set(new["pair_laws"]) == set(CLASSES)
-    for key in ("pair_laws", "law", "representations", "pair_law"):
-        assert new[key] == old[key], key
-    assert "--class-laws-only" in new["provenance"]["pair_laws_from"]
+    for name in ("pocket2-sil", HUMAN):  # the human tissue's from the tissue FE's curves
+        old = json.loads((SKINS_DIR / f"{name}.json").read_text(encoding="utf-8"))
+        new = json.loads((tmp_path / "skins" / f"{name}.json").read_text(encoding="utf-8"))
+        assert set(new["pair_laws"]) == set(CLASSES)
+        for key in ("pair_laws", "law", "representations", "pair_law"):
+            assert new[key] == old[key], (name, key)
+        assert "--class-laws-only" in new["provenance"]["pair_laws_from"]
     # the other skins' files are untouched
     assert ((tmp_path / "skins" / "solid-sil.json").read_bytes()
             == (SKINS_DIR / "solid-sil.json").read_bytes())
 
 
 @pytest.mark.parametrize(("args", "needle"), [
-    (["human-middle-phalanx"], "the designs, which have FE curves per contact class"),
+    (["prosthetic-102l"], "the designs, which have FE curves per contact class"),
     (["pocket2-sil", "--representation", "flex"], "with --class-laws-only"),
 ])
 def test_class_laws_only_refuses_what_it_cannot_do(tmp_path, args, needle):
@@ -258,3 +266,63 @@ def test_the_border_class_needs_the_border_stand_in_geometry(tmp_path):
     (fe / "border-finger" / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
     with pytest.raises(ValueError, match="BORDER_GEOMETRY"):
         class_folders("pocket2-sil", fe)
+
+
+def test_the_shipped_tissue_curves_are_the_tissue_fe_of_every_class(tmp_path):
+    """calibration/fe/tissue holds the tissue FE's curve of every class, each recorded (sha256)
+    with the indenter and body it was run with (a changed file is refused, naming it). Its plate
+    curve is the tissue body fitted to the paper's human mean (3.68 mm at 2 N, within 0.5 %)
+    that follows the tissue's law within 6 % in depth at 5 N (reports/tissue-fe.md); at equal
+    depth a finger presses the phalanx's tissue less than the plate does, and more than the
+    Hertz / elastic-foundation bound (0.3x)."""
+    import shutil
+
+    from softhand.paths import FE_DIR
+    from softhand.skin.calibrate import tissue_curves
+    from softhand.skin.contact_classes import PLATE_CLASS, TISSUE_FE_FOLDER
+
+    curves = tissue_curves(FE_DIR)
+    assert set(curves) == set(CLASSES)
+    plate = curves[PLATE_CLASS]
+    law = reference_law(HUMAN)
+    i = plate.peak_index
+    d_at = {F: float(np.interp(F, plate.force_N[:i + 1], plate.displacement_mm[:i + 1]))
+            for F in (2.0, 5.0)}
+    assert d_at[2.0] == pytest.approx(law.elastic.displacement_at(2.0), rel=5e-3)
+    assert d_at[5.0] == pytest.approx(law.elastic.displacement_at(5.0), rel=0.06)
+    ratio = shape_ratio(plate, curves["phalanx/finger"])
+    r = ratio(np.linspace(0.5, 6.0, 12))
+    assert np.all(r < 1.0) and np.all(r > 0.3), r
+    shutil.copytree(FE_DIR / TISSUE_FE_FOLDER, tmp_path / TISSUE_FE_FOLDER)
+    path = tmp_path / TISSUE_FE_FOLDER / "finger.csv"
+    path.write_text(path.read_text(encoding="utf-8") + "99,9,99,0\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"finger\.csv: its sha256"):
+        tissue_curves(tmp_path)
+
+
+def test_the_human_hand_takes_the_tissue_s_own_class_laws():
+    """The sensored human hand (the paper's protocol) has a law per contact class: the
+    tissue's plate law times the tissue FE's class/plate ratio (the shipped curves, to the
+    spline fit: 1 % of 2 N), each with its pair law against the partner's side
+    (`partner_tissue_class`); every pair of the human handshake carries its own class's law,
+    none the plate fallback."""
+    from softhand.envs.handshake import HandshakeEnv
+    from softhand.paths import FE_DIR
+    from softhand.skin.calibrate import tissue_curves
+    from softhand.skin.contact_classes import PLATE_CLASS
+    from softhand.skin.files import load_calibration
+
+    cal = load_calibration(HUMAN)
+    assert set(cal.pair_laws) == set(CLASSES)
+    curves = tissue_curves(FE_DIR)
+    tissue = reference_law(HUMAN)
+    d = np.linspace(0.25, 6.0, 24)
+    for key, c in cal.pair_laws.items():
+        want = tissue_class_law(tissue, key, curves[PLATE_CLASS], curves[key])
+        assert np.abs(c.law.elastic.force(d) - want.elastic.force(d)).max() < 0.01 * 2.0, key
+        side = partner_tissue_class(key)
+        assert c.pair.against == (tissue.name if side == PLATE_CLASS
+                                  else f"{tissue.name} ({side})"), key
+    env = HandshakeEnv(hand="human")
+    laws = {p.law for p in env.pair_laws.values()}
+    assert all(p.law == p.contact for p in env.pair_laws.values()), laws

@@ -25,7 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from softhand.laws.fit import load_curve
+from softhand.laws.references import HUMAN
 from softhand.paths import FE_DIR, SKINS_DIR
+from softhand.skin.calibrate import tissue_curves
 from softhand.skin.contact_classes import CLASSES, PLATE_CLASS, class_curve
 from softhand.skin.files import load_calibration, shipped_skins
 
@@ -48,14 +50,18 @@ def laws() -> dict:
         cal = load_calibration(skin, SKINS_DIR)
         if not cal.pair_laws:
             continue
-        plate_curve = load_curve(class_curve(skin, PLATE_CLASS, FE_DIR))
+        if skin == HUMAN:  # the human tissue's class laws: against the tissue FE's curves
+            curves = tissue_curves(FE_DIR)
+        else:
+            curves = {key: load_curve(class_curve(skin, key, FE_DIR)) for key in CLASSES
+                      if class_curve(skin, key, FE_DIR).exists()}
+        plate_curve = curves[PLATE_CLASS]
         row = {}
         for key in CLASSES:
             c = cal.pair_laws.get(key)
-            path = class_curve(skin, key, FE_DIR)
-            if c is None or not path.exists():
+            curve = curves.get(key)
+            if c is None or curve is None:
                 continue
-            curve = load_curve(path)
             fe = {f"{d:g}": float(np.interp(d, curve.displacement_mm[:curve.peak_index + 1],
                                              curve.force_N[:curve.peak_index + 1]))
                   for d in DEPTHS_MM}

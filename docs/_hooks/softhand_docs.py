@@ -177,7 +177,7 @@ def _skin_laws() -> str:
 
 #: the population runs compared on the handshake page, column title -> report
 POPULATIONS = {
-    "human hand, plate laws": "reports/population-human.json",
+    "human hand, tissue class laws": "reports/population-human.json",
     "human hand, seed 7": "reports/population-human-seed7.json",
     "pocket2-sil, geometry laws": "reports/population-pocket2-sil-geometry-laws.json",
     "pocket2-sil, seed 7": "reports/population-pocket2-sil-geometry-laws-seed7.json",

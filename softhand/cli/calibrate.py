@@ -23,8 +23,15 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
     """--class-laws-only: each skin's file in --out with a soft contact, and the curve of every
     contact class in --fe-dir's class folders, readable and of the plate folder's settings,
     before the first fit (a refit without them would write files without their class laws)."""
-    from softhand.skin.calibrate import class_folders
-    from softhand.skin.contact_classes import CLASSES, FE_FOLDERS, PLATE_CLASS, class_curve
+    from softhand.laws.references import HUMAN
+    from softhand.skin.calibrate import class_folders, tissue_curves
+    from softhand.skin.contact_classes import (
+        CLASSES,
+        FE_FOLDERS,
+        PLATE_CLASS,
+        TISSUE_FE_FOLDER,
+        class_curve,
+    )
     from softhand.skin.files import load_calibration
 
     for n in names:
@@ -32,6 +39,8 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
             load_calibration(n, out, require=("soft-contact",))
         except ValueError as exc:
             bad(f"--out {str(out)!r}: {exc}")
+        if n == HUMAN:
+            continue  # its class laws come from the tissue FE's curves, checked below
         try:
             found = class_folders(n, fe_dir)
         except ValueError as exc:
@@ -43,6 +52,15 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
                 + "; --class-laws-only needs every class folder ("
                 + ", ".join(f"{FE_FOLDERS[k]}/" for k in CLASSES if k != PLATE_CLASS)
                 + "), as `softhand fe sweep --indenter ... --body ...` writes them")
+    try:
+        tissue = tissue_curves(fe_dir)
+    except ValueError as exc:
+        bad(f"--fe-dir {fe_dir!r}: {exc}")
+    lacking = [k for k in (PLATE_CLASS, "phalanx/finger") if k not in tissue]
+    if lacking:
+        bad(f"--fe-dir {fe_dir!r}: no tissue FE curve of {', '.join(lacking)} in "
+            f"{TISSUE_FE_FOLDER}/ (the partner's tissue law of the finger classes); write it "
+            f"with `python tools/tissue_fe.py --classes {Path(fe_dir) / TISSUE_FE_FOLDER}`")
 
 
 @main.command("calibrate")
@@ -62,7 +80,8 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
               help="Fit only the laws per contact class again (each file's pair_laws, from the "
                    "class folders of --fe-dir: finger/, palm-plate/, palm-finger/, "
                    "border-finger/), keeping the law and the representations of the files in "
-                   "--out. Designs only.")
+                   "--out. The designs and the human tissue (its class laws from "
+                   "--fe-dir's tissue/ curves).")
 @click.option("--json", "as_json", is_flag=True, help="Print the errors as JSON.")
 def calibrate(skins, representations, out_dir, fe_dir, threads, cluster, force, class_laws_only,
               as_json) -> None:
@@ -77,13 +96,15 @@ def calibrate(skins, representations, out_dir, fe_dir, threads, cluster, force, 
 
     check_threads_or_cluster(threads, cluster)
     from softhand.fem.geometry import DESIGNS
+    from softhand.laws.references import HUMAN
 
-    known = list(DESIGNS) if class_laws_only else skin_names()
+    known = [*DESIGNS, HUMAN] if class_laws_only else skin_names()
     names = list(dict.fromkeys(skins)) or known
     for n in names:
         if n not in known:
             bad(f"skin {n!r} is unknown; allowed: {', '.join(known)}"
-                + (" (--class-laws-only: the designs, which have FE curves per contact class)"
+                + (" (--class-laws-only: the designs, which have FE curves per contact class, "
+                   "and the human tissue)"
                    if class_laws_only and n in skin_names() else ""))
     if class_laws_only and representations:
         bad(f"--representation {representations[0]!r} with --class-laws-only: the "

@@ -151,8 +151,8 @@ def calibrate_candidate(candidate: Candidate, name: str, fe_dir: str | Path, *,
     """``candidate``'s skin, calibrated from the folders `run_fe_folders` wrote into ``fe_dir``
     by `softhand.skin.calibrate.calibrate_design` (the shipped designs' path: law, rigid,
     soft contact, relaxation pad, the pair law against human tissue, the laws per contact class
-    whose folder is there). The tissue's finger law comes from ``tissue_fe_dir`` (the shipped
-    curves of the tissue's reference design).
+    whose folder is there). The tissue's class laws come from ``tissue_fe_dir``'s tissue FE
+    curves (`softhand.skin.contact_classes.TISSUE_FE_FOLDER`, shipped in calibration/fe).
 
     The provenance gains ``design``: the variables, the library materials (names, constants,
     sources), the FE folders' depth limits and reach, ``fe_max_N`` (the largest force of the

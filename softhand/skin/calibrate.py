@@ -52,11 +52,13 @@ from softhand.skin.contact_classes import (
     FE_BODY,
     INDENTERS,
     PLATE_CLASS,
-    TISSUE_REFERENCE_DESIGN,
+    TISSUE_FE_FOLDER,
     class_curve,
     fit_class_law,
+    partner_tissue_class,
     tissue_class_law,
     tissue_counterpart,
+    tissue_curve_file,
 )
 from softhand.skin.pad import PadParams
 from softhand.skin.pair import PairLaw, fit_pair_law
@@ -487,8 +489,8 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
     ``settings`` default: the rig at 1 ms with the calibration mass.
     ``fe_design``: the name the curves of ``design`` have in ``fe_dir`` (default ``design``):
     a searched design's curves are written under its FE slot layout's name
-    (`softhand.design.skins`). ``tissue_fe_dir``: the folder with the curves of
-    `TISSUE_REFERENCE_DESIGN` behind the tissue's finger law (default ``fe_dir``).
+    (`softhand.design.skins`). ``tissue_fe_dir``: the FE root whose `TISSUE_FE_FOLDER` holds
+    the tissue's FE curves behind its class laws (default ``fe_dir``).
     """
     settings = settings or RigSettings(mass_kg=CALIBRATION_MASS_KG)
     if curves is None:
@@ -544,8 +546,8 @@ def calibrate_design(design: str, *, fe_dir: str | Path = "calibration/fe",
                             reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
                             initial=initial)
         provenance["pair_law_fit_s"] = time.perf_counter() - t0
-        if curves is None:  # a design with FE curves: its laws per contact class too
-            t0 = time.perf_counter()
+        if curves is None or design == HUMAN:  # FE curves of the design or of the tissue:
+            t0 = time.perf_counter()  # its laws per contact class too
             by_class = class_pair_laws(design, law, main, fe_dir,
                                        reference_mass_kg=settings.mass_kg * MASS_FACTORS[0],
                                        initial=initial, fe_design=fe_design,
@@ -625,40 +627,85 @@ def _mesh_name(settings: dict) -> str:
     return settings["mesh"] if isinstance(settings.get("mesh"), str) else "custom"
 
 
+def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
+    """The human tissue's FE curves per contact class in ``fe_dir``'s `TISSUE_FE_FOLDER`
+    (written by ``python tools/tissue_fe.py --classes``), each checked against the sha256 and
+    the indenter and body its summary.json records; {} where the folder is not there.
+
+    Raises:
+        ValueError: a folder without its summary, a curve it does not record or that differs
+            from its record, or a class of another indenter or body.
+    """
+    import json
+
+    folder = Path(fe_dir) / TISSUE_FE_FOLDER
+    if not folder.is_dir():
+        return {}
+    where = folder / "summary.json"
+    try:
+        summary = json.loads(where.read_text(encoding="utf-8"))
+        runs = summary["provenance"]["settings"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"{where}: not a tissue FE summary ({exc}); write the folder with "
+                         "`python tools/tissue_fe.py --classes`") from None
+    out = {}
+    for key in CLASSES:
+        path = folder / tissue_curve_file(key)
+        if not path.exists():
+            continue
+        got = runs.get(key, {})
+        want, body = INDENTERS[key.split("/")[1]], FE_BODY[key.split("/")[0]]
+        if got.get("indenter", "plate") != want or got.get("body", "phalanx") != body:
+            raise ValueError(f"{where}: class {key} was run with indenter "
+                             f"{got.get('indenter')!r} on {got.get('body')!r}; it needs "
+                             f"{want!r} on {body!r}")
+        out[key] = _recorded_curve(path, f"tissue {key}@0.5mm/s", summary)
+    return out
+
+
 def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str | Path, *,
                     reference_mass_kg: float, initial: SoftContactParams | None = None,
                     fe_design: str | None = None, tissue_fe_dir: str | Path | None = None
                     ) -> dict[str, ClassLaw]:
-    """The laws of ``design`` per contact class whose FE curve ``fe_dir`` holds
-    (`softhand.skin.contact_classes`), each with its pair law against the human tissue's law
-    for that class. ``phalanx/flat`` is the plate law itself (against the tissue pressed like a
-    finger, as a prosthetic phalanx presses a partner's palm). No tissue ``finger`` law (the FE
-    folders lack `TISSUE_REFERENCE_DESIGN`'s plate or finger curve): only the classes
-    whose tissue side is flat. ``fe_design`` and ``tissue_fe_dir``: as in `calibrate_design`."""
+    """The laws of ``design`` per contact class (`softhand.skin.contact_classes`), each with
+    its pair law against the partner's tissue side (`partner_tissue_class`: the tissue's law
+    pressed like a finger or a flat). A design's class law is fitted to its FE curve in
+    ``fe_dir``'s class folder (``phalanx/flat``: the plate law itself); the human tissue's
+    (``design`` `HUMAN`, the sensored human hand) is `tissue_class_law` of the tissue FE's
+    curves. A class without its curve, or whose tissue side lacks the tissue FE's curves
+    (``tissue_fe_dir``'s `TISSUE_FE_FOLDER`, default ``fe_dir``'s), is left out.
+    ``fe_design`` and ``tissue_fe_dir``: as in `calibrate_design`."""
     from softhand.fem.sweep import read_summary
 
     root = Path(fe_dir)
-    plate = read_summary(root)
-    troot = root if tissue_fe_dir is None else Path(tissue_fe_dir)
-    tplate = read_summary(troot)
     tissue = reference_law(HUMAN)
-    ref_finger = _class_folder_curve(TISSUE_REFERENCE_DESIGN, "phalanx/finger", troot, tplate)
-    ref_plate = troot / f"{TISSUE_REFERENCE_DESIGN}.csv"
-    tissues = {"flat": tissue, "finger": None}
-    if ref_finger is not None and ref_plate.exists():
-        ref = _recorded_curve(ref_plate, f"{TISSUE_REFERENCE_DESIGN}@0.5mm/s", tplate)
-        tissues["finger"] = tissue_class_law(tissue, "finger", ref, ref_finger[0])
+    tcurves = tissue_curves(root if tissue_fe_dir is None else Path(tissue_fe_dir))
+    tplate = tcurves.get(PLATE_CLASS)
+
+    def tissue_law(key: str) -> SkinLaw | None:
+        if key != PLATE_CLASS and (tplate is None or key not in tcurves):
+            return None
+        return tissue_class_law(tissue, key, tplate, tcurves.get(key))
+
+    human = design == HUMAN
+    plate = None if human else read_summary(root)
     out: dict[str, ClassLaw] = {}
     for key in CLASSES:
-        t = tissues[tissue_counterpart(key)]
-        found = ((plate_curve, "default" if plate is None else _mesh_name(
-            plate["provenance"]["settings"])) if key == PLATE_CLASS
-                 else _class_folder_curve(fe_design or design, key, root, plate))
+        t = tissue_law(partner_tissue_class(key))
+        if human:
+            skin = tissue_law(key)  # the plate's: the paper's law itself, its own curve
+            curve = plate_curve if key == PLATE_CLASS else tcurves.get(key)
+            found = None if skin is None else (curve, "default")
+        else:
+            found = ((plate_curve, "default" if plate is None else _mesh_name(
+                plate["provenance"]["settings"])) if key == PLATE_CLASS
+                     else _class_folder_curve(fe_design or design, key, root, plate))
         if t is None or found is None:
             continue
         curve, mesh = found
-        skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
-        top = _law_top(skin, float(curve.force_N.max()))
+        if not human:
+            skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
+        top = _law_top(skin, TABLE_MAX_N if human else float(curve.force_N.max()))
         pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
                             tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
                             reference_mass_kg=reference_mass_kg, initial=initial)
@@ -696,18 +743,19 @@ def refit_class_laws(cal: SkinCalibration, fe_dir: str | Path) -> SkinCalibratio
 
     Raises:
         ValueError: ``cal`` has no soft contact (the pair laws start from it), or its design
-            has no FE curves in ``fe_dir``.
+            has no FE curves in ``fe_dir`` (`HUMAN`: its laws come from the tissue FE's).
     """
     from softhand.fem.geometry import DESIGNS
 
-    if cal.design not in DESIGNS:
-        raise ValueError(f"skin {cal.design!r}: only the designs have laws per contact class")
+    if cal.design not in (*DESIGNS, HUMAN):
+        raise ValueError(f"skin {cal.design!r}: only the designs and {HUMAN} have laws per "
+                         "contact class")
     if "soft-contact" not in cal.representations:
         raise ValueError(f"skin {cal.design!r}: no soft-contact representation to start the "
                          "pair laws from; calibrate it first")
-    fit_curves, _ = fe_curves(cal.design, fe_dir)
+    plate = law_curve(cal.law) if cal.design == HUMAN else fe_curves(cal.design, fe_dir)[0][0]
     t0 = time.perf_counter()
-    by_class = class_pair_laws(cal.design, cal.law, fit_curves[0], fe_dir,
+    by_class = class_pair_laws(cal.design, cal.law, plate, fe_dir,
                                reference_mass_kg=CALIBRATION_MASS_KG * MASS_FACTORS[0],
                                initial=cal.soft_contact)
     provenance = {**cal.provenance, "pair_laws_fit_s": time.perf_counter() - t0,
@@ -728,8 +776,8 @@ def calibrate_skin(name: str, *, fe_dir: str | Path = "calibration/fe",
 
     if name in (HUMAN, PROSTHETIC):
         law = reference_law(name)
-        return calibrate_design(name, representations=representations, settings=settings,
-                                law=law, curves=[law_curve(law)])
+        return calibrate_design(name, fe_dir=fe_dir, representations=representations,
+                                settings=settings, law=law, curves=[law_curve(law)])
     if name not in skin_names():
         raise ValueError(f"skin {name!r} is unknown; allowed: {', '.join(skin_names())}")
     return calibrate_design(name, fe_dir=fe_dir, representations=representations,

@@ -32,13 +32,26 @@ A class's skin law keeps the plate law's relaxation (quasi-linear viscoelasticit
 relaxation function is the material's, the elastic law the shape's) and fits its own elastic law
 to the class's FE ramp (`fit_class_law`).
 
-The tissue side of a pair (the partner's human tissue) is pressed by the skin's geom: a
-prosthetic phalanx presses it like a finger, a prosthetic palm like a flat. Published human
-data with curved indenters on the finger's middle phalanx were not found; so the tissue's
-``finger`` law is a stated assumption: the tissue's plate law
-(`softhand.laws.references.human_law`) times the FE's cylinder/plate force ratio of the
-solid silicone phalanx at the same depth (`tissue_class_law`), a homogeneous soft layer of
-the finger's size over bone, as finger pulp is.
+The human tissue has a law per class too, from an FE of the tissue (`TISSUE_FE_FOLDER`,
+written by ``python tools/tissue_fe.py --classes``): the paper's phalanx envelope as one
+homogeneous layer of tissue over the flat bone (one Storakers term, alpha 2, Poisson's ratio
+0.45: assumptions; mu fitted so that the plate gives the paper's human mean 3.68 mm at 2 N;
+it then follows the tissue's exponential law within 5 % in depth at 5 and 7 N,
+reports/tissue-fe.md), pressed as each class presses it: the plate and the finger on the
+phalanx, the palm slab under both, the border stand-in under the finger. A class's tissue law
+is the tissue's plate law (`softhand.laws.references.human_law`, the paper's numbers) times
+that FE's force ratio, class over plate, at the same depth (`tissue_class_law`): the paper
+fixes the plate's curve, the tissue's own FE its shape. No published indentation data with
+curved indenters on the middle phalanx, or of the palm's border, were found; the ratio is the
+FE's prediction, and the layer's constants are assumptions (`TISSUE_FE_FOLDER`'s summary
+records them).
+
+* the partner's tissue side of a pair is pressed by the skin's body: a prosthetic phalanx (or
+  a rounded border, of a finger's radius) like a finger, a palm face like a flat
+  (`tissue_counterpart`): its law is the tissue's ``phalanx/finger`` or plate law;
+* the sensored human hand (the paper's protocol, `softhand handshake --hand human`) takes the
+  tissue's law of each contact's own class, its pair law against the partner's tissue side as
+  above.
 
 A class without FE curves for a skin falls back to the plate law (``phalanx/flat``), and the run
 says so (`pair_law_label`).
@@ -55,9 +68,9 @@ from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
 __all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS",
-           "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_REFERENCE_DESIGN",
-           "class_curve", "classify", "fit_class_law", "geom_shape", "shape_ratio",
-           "tissue_class_law", "tissue_counterpart"]
+           "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_FE_FOLDER",
+           "class_curve", "classify", "fit_class_law", "geom_shape", "partner_tissue_class",
+           "shape_ratio", "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
@@ -81,8 +94,9 @@ FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
 #: palm's rounded border (module docstring)
 BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0}
-#: the design whose FE shape factor stands in for the human tissue's (module docstring)
-TISSUE_REFERENCE_DESIGN = "solid-sil"
+#: the folder under the FE root with the human tissue's FE curves, one file per class
+#: (`tissue_curve_file`) and a summary.json that records them (module docstring)
+TISSUE_FE_FOLDER = "tissue"
 _ROUND = {int(mujoco.mjtGeom.mjGEOM_CAPSULE), int(mujoco.mjtGeom.mjGEOM_CYLINDER),
           int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)}
 
@@ -129,32 +143,47 @@ def fit_class_law(design: str, key: str, plate_law: SkinLaw, curve: Curve) -> Sk
     return fit_skin_law(f"{design} {key}", [curve], prony=plate_law.prony)
 
 
-def tissue_class_law(tissue: SkinLaw, counterpart: str, plate: Curve | None = None,
-                     finger: Curve | None = None) -> SkinLaw:
-    """The human tissue's law for a counterpart: ``flat``: ``tissue`` itself; ``finger``: its
-    elastic force times the cylinder/plate force ratio of `TISSUE_REFERENCE_DESIGN`'s FE
-    ramps (``plate``, ``finger``) at the same depth (module docstring: a stated assumption),
-    the ratio held at its last value beyond the FE's common depth range.
+def partner_tissue_class(key: str) -> str:
+    """The tissue class law the partner's side of a pair of class ``key`` takes: the tissue
+    pressed like a finger (``phalanx/finger``) or like a flat (`PLATE_CLASS`) by the skin's
+    body (`tissue_counterpart`)."""
+    return "phalanx/finger" if tissue_counterpart(key) == "finger" else PLATE_CLASS
+
+
+def tissue_curve_file(key: str) -> str:
+    """The file name of class ``key``'s curve in `TISSUE_FE_FOLDER`."""
+    if key not in CLASSES:
+        raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
+    return f"{FE_FOLDERS[key] or 'plate'}.csv"
+
+
+def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
+                     other: Curve | None = None) -> SkinLaw:
+    """The human tissue's law in class ``key`` (module docstring): `PLATE_CLASS`: ``tissue``
+    itself; another class: its elastic force times the tissue FE's force ratio ``other`` (the
+    class's curve) over ``plate`` (the plate's) at the same depth, the ratio held at its last
+    value beyond the depth both FE ramps reach (`shape_ratio`); the relaxation is
+    ``tissue``'s.
 
     Raises:
-        ValueError: an unknown counterpart, or ``finger`` without both curves.
+        ValueError: an unknown class, or another class than the plate's without both curves.
     """
-    if counterpart == "flat":
+    if key not in CLASSES:
+        raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
+    if key == PLATE_CLASS:
         return tissue
-    if counterpart != "finger":
-        raise ValueError(f"counterpart = {counterpart!r}: allowed {', '.join(COUNTERPARTS)}")
-    if plate is None or finger is None:
-        raise ValueError("the tissue's finger law needs the plate and finger FE curves of "
-                         f"{TISSUE_REFERENCE_DESIGN}")
-    ratio = shape_ratio(plate, finger)
+    if plate is None or other is None:
+        raise ValueError(f"the tissue's {key} law needs the tissue FE's plate and {key} curves "
+                         f"({TISSUE_FE_FOLDER}/ of the FE root)")
+    ratio = shape_ratio(plate, other)
     top = tissue.elastic.max_mm
     d = np.linspace(0.0, top, 200)[1:]
     force = tissue.elastic.force(d) * ratio(d)
     elastic = ElasticLaw.fit(np.concatenate([[0.0], d]), np.concatenate([[0.0], force]),
                              max_mm=top)
-    source = {**tissue.source, "shape_factor": f"{TISSUE_REFERENCE_DESIGN} FE cylinder/plate "
-              f"({finger.label} / {plate.label})"}
-    return SkinLaw(f"{tissue.name} (finger)", elastic, tissue.prony, source=source)
+    source = {**tissue.source, "shape_factor": f"tissue FE {key} / plate ({other.label} / "
+              f"{plate.label})"}
+    return SkinLaw(f"{tissue.name} ({key})", elastic, tissue.prony, source=source)
 
 
 def shape_ratio(plate: Curve, other: Curve):
