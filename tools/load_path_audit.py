@@ -46,6 +46,30 @@ SEAM_MM = 2.0
 #: reads the hold alike on a checkout that lacks it (--before)
 HOLD_SETTLE_S = 0.25
 HELD = ("grip", "shake", "hold")
+#: set in the child processes that run another checkout (--before): its root
+CHECKOUT_ENV = "SOFTHAND_AUDIT_CHECKOUT"
+
+
+def _own_calibration() -> None:
+    """In a child run of another checkout (``CHECKOUT_ENV``, through PYTHONPATH), import
+    ``softhand.calibration`` from that checkout's calibration/: an editable install maps the
+    package to its own checkout's folder, whose files an older checkout's code may not read
+    (a contact class it does not know)."""
+    import importlib.util
+
+    root = os.environ.get(CHECKOUT_ENV)
+    if not root:
+        return
+    import softhand
+
+    folder = os.path.join(root, "calibration")
+    spec = importlib.util.spec_from_file_location(
+        "softhand.calibration", os.path.join(folder, "__init__.py"),
+        submodule_search_locations=[folder])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["softhand.calibration"] = module
+    spec.loader.exec_module(module)
+    softhand.calibration = module
 
 
 def audit(seed: int = 0, hand: str = "prosthetic", timestep_s: float = 0.002,
@@ -291,7 +315,7 @@ def write_report(out: str, before: str | None) -> None:
     checkouts = {"after": here, **({"before": before} if before else {})}
 
     def cost(path: str) -> float:  # one process per measurement, so that neither warms the other
-        env = {**os.environ, "PYTHONPATH": path}
+        env = {**os.environ, "PYTHONPATH": path, CHECKOUT_ENV: path}
         done = subprocess.run([sys.executable, __file__, "--step-cost"], env=env, check=True,
                               capture_output=True, text=True)
         return float(done.stdout)
@@ -305,7 +329,7 @@ def write_report(out: str, before: str | None) -> None:
             "after": {"rows": [audit(s) for s in range(5)] + [audit(0, "human")],
                       "step_us": min(costs["after"]), "step_us_runs": costs["after"]}}
     if before:
-        env = {**os.environ, "PYTHONPATH": before}
+        env = {**os.environ, "PYTHONPATH": before, CHECKOUT_ENV: before}
         with tempfile.TemporaryDirectory() as tmp:
             rows = os.path.join(tmp, "rows.json")
             subprocess.run([sys.executable, __file__, "--table", "--json", rows], env=env,
@@ -447,6 +471,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--update-corners", default=None, metavar="REPORT",
                    help="rerun only the corners into REPORT.json and rewrite REPORT.md")
     a = p.parse_args(argv)
+    _own_calibration()
     if a.update_corners:
         update_corners(a.update_corners)
         return 0
