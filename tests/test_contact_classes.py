@@ -326,3 +326,27 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
     env = HandshakeEnv(hand="human")
     laws = {p.law for p in env.pair_laws.values()}
     assert all(p.law == p.contact for p in env.pair_laws.values()), laws
+
+
+@pytest.mark.parametrize("skin", ["pocket2-sil", HUMAN])
+def test_class_laws_only_refuses_an_fe_folder_without_the_tissue_curves(tmp_path, skin):
+    """Without the tissue FE's curves the refit would leave out every class whose tissue side
+    is a finger (and all of the human tissue's): refused before any work, naming the folder."""
+    import shutil
+
+    from click.testing import CliRunner
+
+    from softhand.cli import main
+    from softhand.paths import FE_DIR, SKINS_DIR
+
+    fe, out = tmp_path / "fe", tmp_path / "skins"
+    shutil.copytree(FE_DIR, fe, ignore=shutil.ignore_patterns("tissue"))
+    out.mkdir()
+    shutil.copy(SKINS_DIR / f"{skin}.json", out / f"{skin}.json")
+    before = (out / f"{skin}.json").read_bytes()
+    res = CliRunner().invoke(main, ["calibrate", skin, "--class-laws-only", "--fe-dir", str(fe),
+                                    "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    lines = [line for line in res.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and "tissue/" in lines[0] and str(fe) in lines[0], res.output
+    assert (out / f"{skin}.json").read_bytes() == before

@@ -53,8 +53,8 @@ def laws() -> dict:
         if skin == HUMAN:  # the human tissue's class laws: against the tissue FE's curves
             curves = tissue_curves(FE_DIR)
         else:
-            curves = {key: load_curve(class_curve(skin, key, FE_DIR)) for key in CLASSES
-                      if class_curve(skin, key, FE_DIR).exists()}
+            paths = {key: class_curve(skin, key, FE_DIR) for key in CLASSES}
+            curves = {key: load_curve(path) for key, path in paths.items() if path.exists()}
         plate_curve = curves[PLATE_CLASS]
         row = {}
         for key in CLASSES:

@@ -56,19 +56,31 @@ def _settings(mu: float, alpha: float, max_force: float, mesh: str = "default"):
         materials={"sil": {"nu": NU, "mu_MPa": [mu], "alpha": [alpha], "g": [], "tau_s": []}})
 
 
-def _curve(mu: float, alpha: float, max_force: float, mesh: str = "default"
-           ) -> tuple[np.ndarray, np.ndarray, str]:
-    """(depth mm, force N, how it ended) of the tissue body, to ``max_force`` or its failure."""
+def _run(mu: float, alpha: float, max_force: float, mesh: str = "default", **extra):
+    """(time s, depth mm, force N, how it ended, settings) of the tissue body, to
+    ``max_force`` or its failure; ``extra``: IndentationSettings fields beside the material's
+    (a class's indenter, body, geometry)."""
+    from dataclasses import replace
+
     from softhand.fem.geometry import Design
     from softhand.fem.solver import ConvergenceError, indent
 
+    settings = replace(_settings(mu, alpha, max_force, mesh), **extra)
     try:
-        r = indent(Design("solid", "sil", "sil"), _settings(mu, alpha, max_force, mesh))
-        return r.displacement_mm, r.force_N, "reached"
+        r = indent(Design("solid", "sil", "sil"), settings)
+        return r.time_s, r.displacement_mm, r.force_N, "reached", settings
     except ConvergenceError as exc:
         d = np.array([0.0] + [e["displacement_mm"] for e in exc.log])
         f = np.array([0.0] + [e["force_N"] for e in exc.log])
-        return d, f, f"stopped at {d[-1]:.2f} mm, {f[-1]:.1f} N (the top elements invert)"
+        return (d / settings.speed_mm_s, d, f,
+                f"stopped at {d[-1]:.2f} mm, {f[-1]:.1f} N (the top elements invert)", settings)
+
+
+def _curve(mu: float, alpha: float, max_force: float, mesh: str = "default"
+           ) -> tuple[np.ndarray, np.ndarray, str]:
+    """(depth mm, force N, how it ended) of the tissue body, to ``max_force`` or its failure."""
+    _, d, f, end, _ = _run(mu, alpha, max_force, mesh)
+    return d, f, end
 
 
 def _depth_at(d: np.ndarray, f: np.ndarray, force: float) -> float | None:
@@ -123,7 +135,12 @@ def main() -> None:
     if a.classes is not None:
         if len(a.alpha) != 1:
             sys.exit(f"--alpha {a.alpha}: --classes takes one alpha")
+        from softhand.skin.contact_classes import TISSUE_FE_FOLDER
+
         folder = Path(a.classes)
+        if folder.name != TISSUE_FE_FOLDER:
+            sys.exit(f"--classes {a.classes}: the folder must be named {TISSUE_FE_FOLDER!r} "
+                     "(the calibration reads FE_ROOT/tissue)")
         if a.report_only:
             if not (folder / "summary.json").is_file():
                 sys.exit(f"--classes {a.classes}: no summary.json there (run without "
@@ -291,20 +308,10 @@ def _class_settings(key: str) -> dict:
 
 def _class_run(key: str, mu: float, alpha: float):
     """(time s, depth mm, force N, how it ended, settings) of the tissue body in class ``key``."""
-    from dataclasses import asdict, replace
+    from dataclasses import asdict
 
-    from softhand.fem.geometry import Design
-    from softhand.fem.solver import ConvergenceError, indent
-
-    settings = replace(_settings(mu, alpha, 20.0), **_class_settings(key))
-    try:
-        r = indent(Design("solid", "sil", "sil"), settings)
-        t, d, f, end = r.time_s, r.displacement_mm, r.force_N, "reached 20 N"
-    except ConvergenceError as exc:
-        d = np.array([0.0] + [e["displacement_mm"] for e in exc.log])
-        f = np.array([0.0] + [e["force_N"] for e in exc.log])
-        t = d / settings.speed_mm_s
-        end = f"stopped at {d[-1]:.2f} mm, {f[-1]:.1f} N (the top elements invert)"
+    t, d, f, end, settings = _run(mu, alpha, 20.0, **_class_settings(key))
+    end = "reached 20 N" if end == "reached" else end
     keep = {k: v for k, v in asdict(settings).items() if k not in ("threads", "solver", "engine")}
     return np.asarray(t, float), np.asarray(d, float), np.asarray(f, float), end, keep
 
@@ -421,14 +428,7 @@ def _ratios(folder: Path) -> dict:
     from softhand.skin.contact_classes import PLATE_CLASS, shape_ratio, tissue_class_law
 
     law = human_law()
-    curves = tissue_curves(folder.parent) if folder.name == "tissue" else {}
-    if not curves:  # another folder name: read it as the calibration would
-        import shutil
-        import tempfile
-
-        with tempfile.TemporaryDirectory() as tmp:
-            shutil.copytree(folder, Path(tmp) / "tissue")
-            curves = tissue_curves(tmp)
+    curves = tissue_curves(folder.parent)  # as the calibration reads it
     a, b = law.source["a_N"], law.source["b_per_mm"]
     depths = {f"{F:g}": math.log1p(F / a) / b for F in RATIO_FORCES_N}
     out = {"depth_mm": depths, "classes": {}}

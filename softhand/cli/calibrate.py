@@ -56,10 +56,13 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         tissue = tissue_curves(fe_dir)
     except ValueError as exc:
         bad(f"--fe-dir {fe_dir!r}: {exc}")
-    lacking = [k for k in (PLATE_CLASS, "phalanx/finger") if k not in tissue]
+    # the partner's side of the finger classes needs the plate and finger curves; the human
+    # tissue's own laws every class's
+    needed = CLASSES if HUMAN in names else (PLATE_CLASS, "phalanx/finger")
+    lacking = [k for k in needed if k not in tissue]
     if lacking:
         bad(f"--fe-dir {fe_dir!r}: no tissue FE curve of {', '.join(lacking)} in "
-            f"{TISSUE_FE_FOLDER}/ (the partner's tissue law of the finger classes); write it "
+            f"{TISSUE_FE_FOLDER}/ (the tissue's class laws); write it "
             f"with `python tools/tissue_fe.py --classes {Path(fe_dir) / TISSUE_FE_FOLDER}`")
 
 

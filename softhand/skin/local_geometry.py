@@ -39,7 +39,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, tissue_counterpart
+from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, partner_tissue_class
 
 __all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "WINDOW_MM", "LocalGeometry",
            "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
@@ -260,7 +260,7 @@ def law_classes(label: str) -> tuple[str, str]:
     (``plate``, ``plate (no ... law)``, ``plate pad``) and the tissue's plate law; ``tissue``
     (a rigid region): the tissue's plate law on both sides of the account."""
     if label.split("/")[0] in ("phalanx", "palm", "border"):
-        return label, f"phalanx/{tissue_counterpart(label)}"
+        return label, partner_tissue_class(label)
     return "phalanx/flat", "phalanx/flat"
 
 
