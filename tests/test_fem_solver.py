@@ -6,6 +6,8 @@ suite stays fast; the 3D runs are in test_fem_paper.py.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -119,3 +121,47 @@ def test_result_bookkeeping_and_interpolation():
                 "displacement_mm", "force_N"):
         assert key in s
     assert r.time_s[r.hold][-1] == pytest.approx(r.time_s[~r.hold][-1] + 2.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("bad", [dict(max_indefinite=0), dict(max_indefinite=1.5),
+                                 dict(max_newton=0)])
+def test_bad_newton_limits_are_refused(bad):
+    (name, _value), = bad.items()
+    with pytest.raises(ValueError, match=name):
+        IndentationSettings(**bad)
+
+
+def _every_tangent_indefinite(monkeypatch):
+    """Make CHOLMOD report every tangent not positive definite: each is then solved by
+    SuperLU in symmetric mode (`softhand.fem.linear`), the same system to rounding."""
+    from softhand.fem import linear
+
+    def refuse(self, vals):
+        raise linear._NotPositiveDefiniteError("forced by the test")
+
+    monkeypatch.setattr(linear._Cholmod, "factorize", refuse)
+
+
+def test_max_indefinite_cuts_first_tries_only_and_keeps_the_equilibria(monkeypatch):
+    """With every tangent indefinite, ``max_indefinite=2`` cuts each step's first try at its
+    second factorization and retries it a quarter as long, never more than once (a retry runs
+    on to max_newton). The elastic, frictionless problem has one equilibrium per plate
+    displacement whatever the steps: both runs land on 1 mm and 2 mm, where the forces agree."""
+    s = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, max_force_N=1.0,
+                            elastic_only=True, solver="cholmod", contact_points=2)
+    plain = indent("pocket2-sil", s)
+    _every_tangent_indefinite(monkeypatch)
+    same = indent("pocket2-sil", s)  # no limit: the same steps, each solved by SuperLU
+    assert [r["iterations"] for r in same.log] == [r["iterations"] for r in plain.log]
+    assert same.force_N == pytest.approx(plain.force_N, rel=1e-6, abs=1e-9)
+    cut = indent("pocket2-sil", replace(s, max_indefinite=2))
+    assert all(r["retries"] <= 1 for r in cut.log)
+    # a first try that needed 2 or more factorizations (3 iterations) was cut
+    assert all(r["iterations"] <= 2 for r in cut.log if not r["retries"])
+    assert plain.log[1]["iterations"] == 3 and plain.log[1]["retries"] == 0
+    assert cut.log[1]["retries"] == 1
+    assert cut.log[1]["increment"] == pytest.approx(0.25 * 1.5 * cut.log[0]["increment"])
+    assert len(cut.log) > len(plain.log)
+    for depth in (1.0, 2.0):
+        assert depth in cut.displacement_mm and depth in plain.displacement_mm
+        assert cut.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)

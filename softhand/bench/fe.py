@@ -5,9 +5,11 @@ Measures, in one process on this machine:
 * the design search's two FE runs (`softhand.design.evaluate.screen_settings`): the 2D screen
   and the 3D check of pocket2-sil to 2 N on CHOLMOD (the default install), with the FE's 4
   contact points per face direction on one thread (the shipped search's runs, the reference)
-  against 2 threads, 2 contact points (the search's since issue 38's item 6) and both,
-  interleaved, each run in a fresh process, with the answers' differences (indentation at 1 N
-  and 2 N, force at 1 mm and 2 mm);
+  against 2 threads, 2 contact points (the search's since issue 38's item 6), both, and both
+  with the 3D check's Newton settings (`softhand.design.evaluate.CHECK_NEWTON`), interleaved,
+  each run in a fresh process, with the answers' differences (indentation at 1 N and 2 N,
+  force at 1 mm and 2 mm); the same for the shipped search's three winners in 3D, before and
+  after the check's Newton settings;
 * the element engines side by side (``IndentationSettings.engine``): the NumPy reference
   (batched NumPy elements, SuperLU ordering and factorizing every tangent) against the compiled
   engine (numba kernels, the run's fixed pattern) on each sparse Cholesky installed here
@@ -221,13 +223,19 @@ def _engines(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
 
 
 #: The design search's runs: (key, keywords of `screen_settings`, label); "search", the
-#: reference, is the FE's 4 contact points on one thread, the shipped search's runs.
-_SCREEN_RUNS = (("search", {"contact_points": 4},
+#: reference, is the FE's 4 contact points on one thread, the shipped search's runs. All but
+#: the last run Newton with the FE's settings (``check_newton=False``); the last is the 3D
+#: check's now (`softhand.design.evaluate.CHECK_NEWTON`; the 2D screen does not use it).
+_SCREEN_RUNS = (("search", {"contact_points": 4, "check_newton": False},
                  "4 contact points, 1 thread (the shipped search's runs)"),
-                ("threads2", {"contact_points": 4, "threads": 2}, "4 contact points, 2 threads"),
-                ("points2", {"contact_points": 2}, "2 contact points, 1 thread"),
-                ("points2_threads2", {"contact_points": 2, "threads": 2},
-                 "2 contact points, 2 threads"))
+                ("threads2", {"contact_points": 4, "threads": 2, "check_newton": False},
+                 "4 contact points, 2 threads"),
+                ("points2", {"contact_points": 2, "check_newton": False},
+                 "2 contact points, 1 thread"),
+                ("points2_threads2", {"contact_points": 2, "threads": 2, "check_newton": False},
+                 "2 contact points, 2 threads"),
+                ("check_newton", {"contact_points": 2, "threads": 2, "check_newton": True},
+                 "2 contact points, 2 threads, the check's Newton settings"))
 _SCREEN_MARKS = (("d1N_mm", "displacement_at_1N_mm"), ("d2N_mm", "displacement_at_2N_mm"),
                  ("F1mm_N", "force_at_1mm_N"), ("F2mm_N", "force_at_2mm_N"))
 
@@ -265,10 +273,12 @@ def _screen(repeats: int, say: Callable[[str], None]) -> dict[str, Any]:
     return out
 
 
-#: The 3D checks of the shipped search's winners: the shipped runs' settings against the search's
-#: now (2 contact points; 2 threads, as on one worker of 2 cores).
-_WINNER_RUNS = (("search", {"contact_points": 4}), ("points2_threads2",
-                                                      {"contact_points": 2, "threads": 2}))
+#: The 3D checks of the shipped search's winners: the shipped runs' settings against 2 contact
+#: points on 2 threads (one worker of 2 cores) with the FE's Newton settings (the check before
+#: `softhand.design.evaluate.CHECK_NEWTON`) and with the check's (the search's now).
+_WINNER_RUNS = (("search", {"contact_points": 4, "check_newton": False}),
+                ("points2_threads2", {"contact_points": 2, "threads": 2, "check_newton": False}),
+                ("check_newton", {"contact_points": 2, "threads": 2, "check_newton": True}))
 
 
 def _winner_checks(say: Callable[[str], None]) -> list[dict[str, Any]]:
@@ -284,7 +294,8 @@ def _winner_checks(say: Callable[[str], None]) -> list[dict[str, Any]]:
             say(f"3D check of winner {i} (trial {w['trial']}): {given}")
             r = _fresh_screen_run("3d", given, trial=w)
             row[key] = {k: r[k] for k in ("wall_s", "newton_iterations", "n_steps",
-                                          "displacement_at_1N_mm", "displacement_at_2N_mm")}
+                                          "displacement_at_1N_mm", "displacement_at_2N_mm",
+                                          "force_at_1mm_N", "force_at_2mm_N")}
         rows.append(row)
     return rows
 
@@ -328,8 +339,9 @@ def _screen_lines(d: dict[str, Any]) -> list[str]:
              "default install; `softhand.design.evaluate.screen_settings`), interleaved, each "
              "in a fresh process, median wall; the answers' differences from the first row's "
              "run. The search screens in 2D with 2 contact points, one thread per worker, and "
-             "checks in 3D with 2 contact points on this machine's CPUs shared among its "
-             "workers (2 threads on one worker of 2 cores; studies from before keep 4):", "",
+             "checks in 3D with 2 contact points and the check's Newton settings (the last "
+             "row) on this machine's CPUs shared among its workers (2 threads on one worker "
+             "of 2 cores; studies from before keep 4):", "",
              "| run | settings | wall (s) | speed-up | Newton iterations | d(1 N) | d(2 N) "
              "| F(1 mm) | F(2 mm) |", "|---|---|---|---|---|---|---|---|---|"]
 
@@ -358,6 +370,35 @@ def _screen_lines(d: dict[str, Any]) -> list[str]:
                 f"{a['wall_s'] / b['wall_s']:.2f}x | "
                 + " | ".join(pct(_pct(b[f], a[f])) for f in
                              ("displacement_at_1N_mm", "displacement_at_2N_mm")) + " |")
+        lines += _check_newton_lines(e["winners"])
+    return lines
+
+
+def _check_newton_lines(winners: list[dict[str, Any]]) -> list[str]:
+    """The winners' 3D check with the check's Newton settings against the same check (2 points,
+    2 threads) with the FE's, from the same run: time and the answers' differences."""
+    rows = [w for w in winners if "check_newton" in w]
+    if not rows:
+        return []
+
+    def pct(v):
+        return "" if v is None else f"{v:+.3f} %"
+
+    lines = ["", "The same checks (2 contact points, 2 threads) with the FE's Newton settings "
+             "(before) and the check's (`softhand.design.evaluate.CHECK_NEWTON`, after), with "
+             "the differences of after from before:", "",
+             "| winner | before: wall (s) | iterations | after: wall (s) | iterations "
+             "| speed-up | d(1 N) | d(2 N) | F(1 mm) | F(2 mm) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for w in rows:
+        a, b = w["points2_threads2"], w["check_newton"]
+        lines.append(
+            f"| {w['winner']} (trial {w['trial']}) | {a['wall_s']:.2f} | "
+            f"{a['newton_iterations']} | {b['wall_s']:.2f} | {b['newton_iterations']} | "
+            f"{a['wall_s'] / b['wall_s']:.2f}x | "
+            + " | ".join(pct(_pct(b.get(f), a.get(f))) for f in
+                         ("displacement_at_1N_mm", "displacement_at_2N_mm", "force_at_1mm_N",
+                          "force_at_2mm_N")) + " |")
     return lines
 
 
