@@ -19,7 +19,7 @@ import numpy as np
 import softhand.envs  # noqa: F401  (registers softhand/Handshake-v0)
 
 FINGERS = ("Index", "Middle", "Ring", "Little")
-GAIN_PER_N = 0.5  # motor speed (1 = full closing) per N of error
+GAIN_PER_N = 1.0  # motor speed (1 = full closing) per N of error
 SETTLE_S = 0.3  # the start of the shake left out: the fingers are still closing onto the partner
 #: the observation entries each ``observe`` gives the regions (their names' first part)
 REGION_VALUES = {"load": "load_estimate/", "sensor": "sensor_patch/", "contact": "region_load/"}

@@ -197,10 +197,10 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
 def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
     """The grasp is the cheapest of the solver's starts, then hops to any cheaper minimum nearby:
     its cost is at most the cheapest start's. For a 174 x 101 mm partner the starts alone left
-    two answers 10.5 deg and 6 mm apart (the analytic Jacobian's cheapest start and finite
-    differences', 1.9 % apart in cost; reports/grasp-agreement.md had 9 such pairs of hands of
-    34); with the hops, finite differences (another solver of the same definition) land within
-    the issue's 2 deg and 2 mm of the grasp (measured 0.0 deg, 0.0 mm)."""
+    two answers 10.5 deg and 6 mm apart when the palms' parallelism weighed 0.02 (the analytic
+    Jacobian's cheapest start and finite differences', 1.9 % apart in cost; the hops found the
+    cheaper one); finite differences (another solver of the same definition) land within the
+    issue's 2 deg and 2 mm of the grasp."""
     from softhand.hands.grasp import _Problem, _solve_grasp, _solve_starts, _start_runs
 
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
@@ -210,7 +210,6 @@ def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
     problem = _Problem(config, GRASP_SETTINGS)
     costs = [cost for cost, _, _ in _start_runs(problem, GRASP_SETTINGS)]
     assert grasp.cost <= min(costs)
-    assert grasp.cost < (1.0 - 0.01) * min(costs)  # the hops found the cheaper minimum here
     _, x_fd, _ = _solve_starts(problem, GRASP_SETTINGS, finite_differences=True)
     joints = np.degrees(np.abs(x_fd[6:] - np.concatenate([grasp.partner_q,
                                                           grasp.prosthetic_q])).max())
@@ -222,21 +221,22 @@ def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
 @pytest.mark.slow
 def test_the_palm_alignment_weight_turns_the_partners_palm_parallel(monkeypatch):
     """The grasp's palms-parallel target is weighted `GraspSettings.palm_align_weight`: at the
-    shipped 0.02 the default grasp rolls the partner's palm onto one edge of the prosthetic palm
-    (measured 14.5 deg; reports/palm-alignment.md), at 0.3 it holds them parallel (measured
-    0.6 deg) and still touching. `solve_grasp()` reads the module's `GRASP_SETTINGS` at the call
-    (tools/palm_alignment.py replaces it), never a grasp cached under other settings."""
+    shipped 0.2 the default grasp holds the palms parallel (measured 1.4 deg) and pressed; at
+    0.02, the weight before, it rolled the partner's palm onto one edge of the prosthetic palm
+    (measured 14.5 deg) and the palms carried none of the force (reports/palm-alignment.md).
+    `solve_grasp()` reads the module's `GRASP_SETTINGS` at the call (tools/palm_alignment.py
+    replaces it), never a grasp cached under other settings."""
     import dataclasses
 
     from softhand.hands import grasp as g
 
     config = SceneConfig()
     shipped = solve_grasp(config)
-    aligned = dataclasses.replace(GRASP_SETTINGS, palm_align_weight=0.3)
-    monkeypatch.setattr(g, "GRASP_SETTINGS", aligned)
-    parallel = solve_grasp(config)
-    assert parallel.settings == aligned and shipped.settings == GRASP_SETTINGS
-    assert shipped.metrics["palm_angle_deg"] > 10.0
-    assert parallel.metrics["palm_angle_deg"] < 2.0
-    assert -GRASP_SETTINGS.max_depth_m * 1e3 < parallel.metrics["palm_gap_mm"]["Palm"] < 0.0
-    assert parallel.cost < g.GOOD_COST_M2
+    light = dataclasses.replace(GRASP_SETTINGS, palm_align_weight=0.02)
+    monkeypatch.setattr(g, "GRASP_SETTINGS", light)
+    rolled = solve_grasp(config)
+    assert rolled.settings == light and shipped.settings == GRASP_SETTINGS
+    assert rolled.metrics["palm_angle_deg"] > 10.0
+    assert shipped.metrics["palm_angle_deg"] < 3.0
+    assert -GRASP_SETTINGS.max_depth_m * 1e3 < shipped.metrics["palm_gap_mm"]["Palm"] < 0.0
+    assert shipped.cost < g.GOOD_COST_M2

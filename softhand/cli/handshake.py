@@ -189,7 +189,10 @@ def handshake(design, skin_items, representation, controller, seed, timestep_s, 
                    f"{v['sensor_peak']:.2f} | {v['sensor_mean']:.2f} |")
     chk = summary["grasp_checks"]
     thumbs = chk["thumb_tip_in_other_mm"]
-    click.echo(f"\ngrasp at mid-shake (t = {chk['t_mid_shake_s']:.2f} s): palm to palm (thenars "
+    pp = summary["palm_on_palm"]
+    click.echo(f"\npalm on palm while the hands hold each other: {pp['palm_share_pct']:.1f} % of "
+               f"the force between the hands ({pp['with_thenars_pct']:.1f} % with the thenars)")
+    click.echo(f"grasp at mid-shake (t = {chk['t_mid_shake_s']:.2f} s): palm to palm (thenars "
                f"included) {chk['palm_to_palm_share_pct']:.0f} % of the force between the hands; "
                f"thumb pads {thumbs['partner_on_prosthetic'][2]:.0f} mm (partner's) and "
                f"{thumbs['prosthetic_on_partner'][2]:.0f} mm (prosthetic's) dorsal of the other "

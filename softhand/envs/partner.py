@@ -23,7 +23,9 @@ scale this timeline by the published spread (softhand.envs.population).
 
 Grip: the partner reaches with an open hand, closes to its grasp posture (solved from the
 handshake's contacts, softhand.hands.grasp) and adds a grip effort (joint impedance towards the
-grasp plus a flexion offset): a PI regulator sets the effort so that the summed force its
+grasp plus a flexion offset on the fingers' joints and the thumb's CMC, THUMB_HOLDS keeping
+the thumb's MCP and IP at the grasp): a PI regulator (GRIP_KP, GRIP_TI_S) sets the effort so
+that the summed force its
 phalanges feel (contact sensors ``hum_feel_*`` on the phalanx tissues, as the data-glove sensors
 on the subjects' fingers; the palm and thenar are left out, so that a push on the palm does not
 open the fingers) follows GRIP_FORCE_N times ``squeeze`` times GRIP_PHALANGES (GRIP_FORCE_N
@@ -189,6 +191,16 @@ HOLD_KEEPS_EFFORT = True
 #: impedance of softhand.hands.partner it presses a phalanx with a few newtons: the regulator
 #: never needs it whole in a light handshake, so it does not saturate into a fist.
 MAX_EFFORT_RAD = 1.0
+#: The grip regulator's gains (`_grips`): the proportional part gives GRIP_KP of the whole
+#: effort at 100 % force error, the integral part takes the whole effort in GRIP_TI_S. Chosen on
+#: the default run (seeds 0-4, three controllers), the four +-2.5 SD corner partners and 30
+#: sampled partners (reports/palm-alignment.md): with the palms held parallel the gains before
+#: (0.5, 0.1 s) let the integral charge while the fingers closed and the grip overshot; a
+#: proportional gain of 1.0 stepped the digits' targets by a whole effort at the grip's first
+#: step, the partner's index slammed onto the other palm and the 1 and 2 ms runs parted by 33 %
+#: on that peak.
+GRIP_KP = 0.7
+GRIP_TI_S = 0.12
 
 
 class PartnerScript:
@@ -336,11 +348,10 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
             if phase != 3 or not HOLD_KEEPS_EFFORT:  # the hold keeps the shake's last effort
                 target = grip_N[w]
                 error = _clip((target - feel_N[w]) / target, -1.0, 1.0)
-                # PI: the integral takes the whole effort in 0.1 s at 100 % force error, the
-                # proportional part adds half of it
-                integral[w] = _clip(integral[w] + MAX_EFFORT_RAD * error * dt / 0.1, 0.0,
+                # PI (GRIP_KP, GRIP_TI_S)
+                integral[w] = _clip(integral[w] + MAX_EFFORT_RAD * error * dt / GRIP_TI_S, 0.0,
                                     MAX_EFFORT_RAD)
-                efforts[w] = _clip(integral[w] + 0.5 * MAX_EFFORT_RAD * error, 0.0,
+                efforts[w] = _clip(integral[w] + GRIP_KP * MAX_EFFORT_RAD * error, 0.0,
                                    MAX_EFFORT_RAD)
             for j in range(out.shape[1]):
                 q = (open_q[w, j] + s * (grasp_q[w, j] - open_q[w, j])
@@ -375,9 +386,23 @@ def partner_postures(grasp: Grasp, lower_rad: np.ndarray,
     rot = PARTNER_JOINTS.index("thumb_rot")
     open_q[rot] = grasp_q[rot]
     effort_dir = np.ones_like(grasp_q)
-    effort_dir[rot] = 0.0
-    q_max = np.asarray(upper_rad, float) - np.radians(grasp.settings.limit_margin_deg)
+    for joint in ("thumb_rot", *THUMB_HOLDS):
+        effort_dir[PARTNER_JOINTS.index(joint)] = 0.0
+    q_max = np.asarray(upper_rad, float) - np.radians(GRIP_LIMIT_MARGIN_DEG)
     return {"open_q": open_q, "grasp_q": grasp_q, "effort_dir": effort_dir, "q_max": q_max}
+
+
+#: The thumb joints that hold the grasp's posture instead of taking the grip effort: the thumb
+#: presses onto the other hand's back from its base (the CMC), its MCP and IP keep their angles
+#: (assumption). With the flexion offset on all three, the fingers of the largest partners
+#: (216 mm long) closed over the thumb's tip and pushed its MCP and IP onto their stops, 1-1.5 mm
+#: into the fingers, once the palms lie parallel (reports/palm-alignment.md).
+THUMB_HOLDS = ("thumb_mcp", "thumb_ip")
+#: How far inside its range the grip effort may flex a digit joint (deg; ``q_max``): a digit that
+#: meets nothing does not curl onto its stop (a fist). Assumption, 7 deg: with the grasp's own
+#: 10 deg (GraspSettings.limit_margin_deg) the longest, narrowest partner (216 x 73 mm), whose
+#: fingers wrap the other hand to that bound, held its grip 16 % short at full effort.
+GRIP_LIMIT_MARGIN_DEG = 7.0
 
 
 #: How far from the paper's subjects' mean a partner's hand may be, in standard deviations (Table 1).

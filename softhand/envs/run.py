@@ -80,7 +80,9 @@ class HandshakeRun:
     controller: dict = field(default_factory=dict)
     #: per frame: the partner's summed digit force and its target (N)
     partner_grip_N: np.ndarray | None = None
-    #: per frame: normal force between the two palms (thenars included) and between the hands (N)
+    #: per frame: normal force between the two palms (thenars included), between the hands, and
+    #: between the palms' faces alone (the sensored palm's palmar face on the partner's palm
+    #: piece: PALM_FACES) (N)
     palm_force_N: np.ndarray | None = None
     #: the episode: sensored hand, partner's hand size (mm), seed, softhand version
     episode: dict = field(default_factory=dict)
@@ -114,6 +116,20 @@ class HandshakeRun:
         total = float(self.palm_force_N[hold, 1].sum() * dt)
         return {"double_Ns": double,
                 "double_share_pct": 100.0 * double / total if total > 0 else 0.0}
+
+    def palm_on_palm(self) -> dict[str, float]:
+        """How much of the force between the hands the palms exchange while the hands hold each
+        other (grip, shake, hold; issue 35's measure): ``palm_share_pct`` between the palms'
+        faces alone (the sensored palm's palmar face on the partner's palm piece: not a thumb or
+        a finger on a palm, not the thenars, `PALM_FACES`), ``with_thenars_pct`` with the
+        thenar pieces of both hands (`PALM_PIECES`), in % of the force between the hands."""
+        if self.palm_force_N is None:
+            return {"palm_share_pct": 0.0, "with_thenars_pct": 0.0}
+        hold = np.array([p in HOLDING for p in self.phase])
+        sums = self.palm_force_N[hold].sum(axis=0)
+        total = float(sums[1])
+        return {"palm_share_pct": 100.0 * float(sums[2]) / total if total > 0 else 0.0,
+                "with_thenars_pct": 100.0 * float(sums[0]) / total if total > 0 else 0.0}
 
     def overload(self) -> dict:
         """Where the episode overloaded: the deepest pair (mm, its geoms, when), the bone-on-bone
@@ -161,7 +177,7 @@ class HandshakeRun:
                 margin = min(margin, g["partner_limit_margin_deg"])
             if k == mid:
                 at_mid = g
-        palm, total = self.palm_force_N[mid] if self.palm_force_N is not None else (0.0, 0.0)
+        palm, total = self.palm_force_N[mid, :2] if self.palm_force_N is not None else (0.0, 0.0)
         return {"t_mid_shake_s": float(self.time_s[mid]),
                 "palm_to_palm_share_pct": float(100 * palm / total) if total > 0 else 0.0,
                 "palm_gap_mm": at_mid.get("palm_gap_mm", {}),
@@ -392,6 +408,7 @@ class HandshakeRun:
                 "overload": self.overload(),
                 "hold": self.hold_relaxation(),
                 "double_count": self.double_count(),
+                "palm_on_palm": self.palm_on_palm(),
                 "kinematics": self.kinematics(),
                 "steps_per_s": self.steps / self.wall_s,
                 "realtime_factor": self.steps * float(self.model.opt.timestep) / self.wall_s,
@@ -416,6 +433,8 @@ class HandshakeRun:
 #: its palmar ones (the pieces a hand lacks are left out).
 PALM_PIECES = {"prosthetic": ("Palm", "Palm1", "Palm2", "Thenar"),
                "partner": ("palm", "thumb_metacarpal")}
+#: The palms' faces alone (PALM_PIECES less the thenars): palm on palm, not a thumb on a palm.
+PALM_FACES = {"prosthetic": ("Palm", "Palm1", "Palm2"), "partner": ("palm",)}
 #: The zones of the prosthetic palm's surface that face the other palm.
 PALM_FACE_ZONES = ("Palm1", "Palm2")
 
@@ -426,16 +445,19 @@ SEAM_M = 0.002
 
 
 def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray,
-                  palmar: Callable[[int, np.ndarray], bool] | None = None) -> tuple[float, float]:
-    """Normal force (N) between the two hands' palm pieces, and between the hands in all;
-    ``pro``, ``hum``: per geom, whether it is a palm piece of that hand (masks over the geoms);
-    ``palmar(geom, point)``: whether a contact at ``point`` on a prosthetic palm piece lies on
-    its palmar face (default: all of it)."""
+                  palmar: Callable[[int, np.ndarray], bool] | None = None,
+                  faces: tuple[np.ndarray, np.ndarray] | None = None
+                  ) -> tuple[float, float, float]:
+    """Normal force (N) between the two hands' palm pieces, between the hands in all, and
+    between the palms' faces alone; ``pro``, ``hum``: per geom, whether it is a palm piece of
+    that hand (masks over the geoms); ``faces``: the same masks of the faces alone (default:
+    the pieces); ``palmar(geom, point)``: whether a contact at ``point`` on a prosthetic palm
+    piece lies on its palmar face (default: all of it)."""
     con = d.contact
     adr = con.efc_address
     live = adr >= 0
     if not live.any():
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     g, f = con.geom[live], d.efc_force[adr[live]]
     palm = (pro[g[:, 0]] & hum[g[:, 1]]) | (pro[g[:, 1]] & hum[g[:, 0]])
     if palmar is not None:
@@ -443,7 +465,9 @@ def _palm_to_palm(d: mujoco.MjData, pro: np.ndarray, hum: np.ndarray,
         for i in np.flatnonzero(palm):
             own = g[i, 0] if pro[g[i, 0]] else g[i, 1]
             palm[i] = palmar(int(own), pos[i])
-    return float(f[palm].sum()), float(f.sum())
+    fp, fh = faces if faces is not None else (pro, hum)
+    face = palm & ((fp[g[:, 0]] & fh[g[:, 1]]) | (fp[g[:, 1]] & fh[g[:, 0]]))
+    return float(f[palm].sum()), float(f.sum()), float(f[face].sum())
 
 
 def mean_curvature_radius(model: mujoco.MjModel, geom: int) -> float:
@@ -747,10 +771,12 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
     m, d = base.model, base.data
     zones = [m.site(f"pro_touch_{r}").id for r in base.region_names]
     areas = ContactAreas(m, [m.geom(g).id for g in base.region_geoms], pair_laws(base), zones)
-    palms = [np.isin(np.arange(m.ngeom), [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM,
-                                                            f"{prefix}{p}") for p in pieces])
-             for prefix, pieces in (("pro_skin_", PALM_PIECES["prosthetic"]),
-                                    ("hum_tissue_", PALM_PIECES["partner"]))]
+    def geoms(table: dict) -> list[np.ndarray]:  # per hand, a mask of its pieces in ``table``
+        return [np.isin(np.arange(m.ngeom), [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM,
+                                                               f"{prefix}{p}") for p in pieces])
+                for prefix, pieces in (("pro_skin_", table["prosthetic"]),
+                                       ("hum_tissue_", table["partner"]))]
+    palms, faces = geoms(PALM_PIECES), tuple(geoms(PALM_FACES))
     face = [base.region_names.index(z) for z in PALM_FACE_ZONES]
 
     def palmar(geom: int, point: np.ndarray) -> bool:  # the palm's surface: its palmar zones
@@ -782,7 +808,7 @@ def run_policy(env: Any, policy: Callable[[Any, dict], Any], *, seed: int = 0,
             frames["s"].append([info["sensor_readings_N"][r] for r in base.region_names])
             frames["ph"].append(info["phase"])
             frames["g"].append((info["partner_grip_measured_N"], info["partner_grip_N"]))
-            frames["pp"].append(_palm_to_palm(d, *palms, palmar))
+            frames["pp"].append(_palm_to_palm(d, *palms, palmar, faces))
             area, rigid, rows = areas(d)
             frames["c"].append(rows)
             frames["a"].append(area)

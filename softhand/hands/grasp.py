@@ -18,10 +18,10 @@ A handshake is defined by its contacts, not by a clearance rule. Descriptions us
 Targets (residuals of a least-squares problem, lengths in m; `solve_grasp`):
 
 - palms: each prosthetic palmar piece (Palm1, Palm2) touches the partner's palmar tissue, pressed
-  ``press_m``; the two palm normals are opposite (weighted ``palm_align_weight``: at the shipped
-  0.02 the default grasp rolls the partner's palm 14.5 deg onto one edge of the prosthetic palm,
-  and the palms carry none of the handshake's force; reports/palm-alignment.md measures 0.1 and
-  0.3, which hold them parallel and pressed at the cost of the largest partners' grip)
+  ``press_m``; the two palm normals are opposite (weighted ``palm_align_weight``: at 0.02, the
+  weight before, the default grasp rolled the partner's palm 14.5 deg onto one edge of the
+  prosthetic palm and the palms carried none of the handshake's force; at the shipped 0.2 they
+  lie parallel and pressed, reports/palm-alignment.md)
 - web spaces: the two web points (radial border of the index metacarpal, half-way between the
   thumb's CMC and the index MCP) coincide in the plane of the palms
 - thumbs: each thumb's pad on the back of the other hand's index metacarpal (60 % of its length from
@@ -121,15 +121,16 @@ class GraspSettings:
         max_iter: iterations per stage.
         palm_align_weight: weight of the palms' parallelism target (its residual: the sum of the
             two palm normals, about the angle between the palms in rad, times this; against
-            5 x each palm probe's distance in m, so 0.02 makes 14 deg of roll cost about as
-            much as 1 mm of press). At 0.02 (shipped) the default grasp rolls the partner's palm
-            14.5 deg onto one edge of the prosthetic palm and the palms carry 0.0 % of the force
-            (seeds 0-2); at 0.3 they stay parallel (0.6 deg), pressed 3 mm through the shake,
-            and carry 5.3-5.5 %, but the 216 mm partners reach their joint stops and the
-            216 x 107 mm one overshoots its grip by 17 % (the tests allow 15 %). At 0.1 the
-            grasp has one answer at the four +-2.5 SD corners (other solvers within 1.6 deg and
-            0.2 mm; 37 deg at 0.02) but not for 6 of 30 sampled partners (none at 0.02):
-            reports/palm-alignment.md, reports/grasp-agreement-palms-0.1.md.
+            5 x each palm probe's distance in m, so 0.2 makes 1.4 deg of roll cost about as
+            much as 1 mm of press). Shipped 0.2: the default grasp holds the palms parallel
+            (1.4 deg) and they press each other through the handshake (palm on palm 4-5 % of
+            the force between the hands, seeds 0-4). At 0.02, the weight before, the grasp
+            rolled the partner's palm 14.5 deg onto one edge of the prosthetic palm and the
+            palms carried 0.0 % (reports/palm-alignment.md compares 0.02, 0.2 and 0.3). With
+            the palms parallel the largest partners' fingers close over their own thumb on the
+            other hand's back: the partner's thumb holds its MCP and IP and its grip may flex a
+            joint to 7 deg from its stop (softhand.envs.partner.THUMB_HOLDS,
+            GRIP_LIMIT_MARGIN_DEG).
     """
 
     press_m: float = 0.001
@@ -137,7 +138,7 @@ class GraspSettings:
     bone_clearance_m: float = 0.004
     limit_margin_deg: float = 10.0
     max_iter: int = 200
-    palm_align_weight: float = 0.02
+    palm_align_weight: float = 0.2
 
 
 GRASP_SETTINGS = GraspSettings()
