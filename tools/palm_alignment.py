@@ -16,7 +16,7 @@ weight:
   border law carrying fingers on the palm's border (98 % of what it carries);
 - the four +-2.5 SD partners of Table 1: grip, joint margin, self-penetration, palm share;
 - with ``--agreement``, issue 35's check that the grasp has one answer at those four corners:
-  finite differences and a second hop seed against the shipped solver
+  finite differences and other hop seeds (2, 3) against the shipped solver
   (`tools/grasp_agreement.py`'s measure: largest joint difference, pose, cost).
 
 Usage: ``python tools/palm_alignment.py --out reports/palm-alignment [--weights 0.02 0.2 0.3]
@@ -220,17 +220,17 @@ def markdown(r: dict) -> str:
             "(deg), and the cost against the shipped grasp's (`tools/grasp_agreement.py`'s "
             "measure).",
             "",
-            "| weight | partner mm | FD: joint deg, mm, deg | FD cost | seed 1: joint deg, mm, "
-            "deg | seed 1 cost |",
+            "| weight | partner mm | FD: joint deg, mm, deg | FD cost | hop seeds 2-3: joint deg, "
+            "mm, deg | hop seeds 2-3 cost |",
             "|---|---|---|---|---|---|",
         ]
         for row in r["weights"]:
             for x in row["agreement"]:
-                fd, s1 = x["fd"], x["seed1"]
+                fd, s1 = x["fd"], x["other_seeds"]
                 lines.append(
                     f"| {row['weight']:g} | {x['partner_mm'][0]:g} x {x['partner_mm'][1]:g} | "
                     f"{fd[0]:.1f}, {fd[1]:.1f}, {fd[2]:.1f} | {x['fd_cost_pct']:+.1f} % | "
-                    f"{s1[0]:.1f}, {s1[1]:.1f}, {s1[2]:.1f} | {x['seed1_cost_pct']:+.1f} % |")
+                    f"{s1[0]:.1f}, {s1[1]:.1f}, {s1[2]:.1f} | {x['other_seeds_cost_pct']:+.1f} % |")
         lines.append("")
     return "\n".join(lines)
 
