@@ -42,10 +42,11 @@ on the near side of what it would pass through: the thumbs stay over the other h
 Both stages run from each of five starts, and the grasp is the cheapest (`_solve_starts`): the
 targets leave local minima (a finger on one side of a neighbour or the other), and the first
 start that met the acceptance could be 20 % dearer and 38 deg away from the cheapest. From the
-cheapest start the solver hops to cheaper minima nearby (`_hop`): with the starts alone,
-finite differences found another minimum 2-10 deg away on 9 of 34 pairs of hands; with the hops
-the two solvers, and two hop seeds, agree on most pairs but not yet all
-(reports/grasp-agreement.md lists the rest).
+cheapest start the solver hops to cheaper minima nearby (`_hop`), in two searches of their own
+seeds (_HOP_SEEDS), and keeps the cheaper: with the starts alone, finite differences found
+another minimum 2-10 deg away on 9 of 34 pairs of hands; with the hops the two solvers, and
+other hop seeds, agree on most pairs but not yet all (reports/grasp-agreement.md lists the
+rest).
 
 Variables: the partner hand frame's pose relative to the prosthetic hand frame (position, and a
 rotation vector about the starting orientation), the partner's 16 digit joints (wrist at 0), the
@@ -126,7 +127,7 @@ class GraspSettings:
             (1.4 deg) and they press each other through the handshake (palm on palm 4-5 % of
             the force between the hands, seeds 0-4). At 0.02, the weight before, the grasp
             rolled the partner's palm 14.5 deg onto one edge of the prosthetic palm and the
-            palms carried 0.0 % (reports/palm-alignment.md compares 0.02, 0.2 and 0.3). With
+            palms carried 0.0 % (reports/palm-alignment.md compares 0.02 and 0.2; 0.3 in its history). With
             the palms parallel the largest partners' fingers close over their own thumb on the
             other hand's back: the partner's thumb holds its MCP and IP and its grip may flex a
             joint to 7 deg from its stop (softhand.envs.partner.THUMB_HOLDS,
@@ -168,8 +169,8 @@ _MU_FACTOR = 10.0 ** 0.5
 #: and 0.2-1.3 % in cost, which tiers (1, 3, 6) and patience 24 reach: all 30 sampled partners
 #: within 0.7 deg and 0.3 mm of both checks, the 159 x 73 mm corner still apart (seed 1 stops
 #: 2.1 % dearer; finite differences start in a basin 23 % dearer); narrow hops alone missed the
-#: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 3-11 s instead of 1.5-2.5 s
-#: (then it is cached).
+#: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 6-14 s with the two
+#: searches of _HOP_SEEDS (1.5-2.5 s with the starts alone; then it is cached).
 _HOP_SEED = 0
 #: The hop searches of a grasp, one per seed from the same cheapest start; the grasp is the
 #: cheapest they reach. With the palms held parallel (palm_align_weight 0.2) the minima lie
