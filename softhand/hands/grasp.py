@@ -169,7 +169,7 @@ _MU_FACTOR = 10.0 ** 0.5
 #: and 0.2-1.3 % in cost, which tiers (1, 3, 6) and patience 24 reach: all 30 sampled partners
 #: within 0.7 deg and 0.3 mm of both checks, the 159 x 73 mm corner still apart (seed 1 stops
 #: 2.1 % dearer; finite differences start in a basin 23 % dearer); narrow hops alone missed the
-#: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 6-14 s with the two
+#: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 6-21 s with the two
 #: searches of _HOP_SEEDS (1.5-2.5 s with the starts alone; then it is cached).
 _HOP_SEED = 0
 #: The hop searches of a grasp, one per seed from the same cheapest start; the grasp is the
