@@ -373,6 +373,19 @@ def _grips(t, feel_N, dt, ends, open_q, grasp_q, effort_dir, q_max, grip_N, inte
 OPEN_MARGIN_DEG = 5.0
 
 
+#: The thumb joints that hold the grasp's posture instead of taking the grip effort: the thumb
+#: presses onto the other hand's back from its base (the CMC), its MCP and IP keep their angles
+#: (assumption). With the flexion offset on all three, the fingers of the largest partners
+#: (216 mm long) closed over the thumb's tip and pushed its MCP and IP onto their stops, 1-1.5 mm
+#: into the fingers, once the palms lie parallel (reports/palm-alignment.md).
+THUMB_HOLDS = ("thumb_mcp", "thumb_ip")
+#: How far inside its range the grip effort may flex a digit joint (deg; ``q_max``): a digit that
+#: meets nothing does not curl onto its stop (a fist). Assumption, 7 deg: with the grasp's own
+#: 10 deg (GraspSettings.limit_margin_deg) the longest, narrowest partner (216 x 73 mm), whose
+#: fingers wrap the other hand to that bound, held its grip 16 % short at full effort.
+GRIP_LIMIT_MARGIN_DEG = 7.0
+
+
 def partner_postures(grasp: Grasp, lower_rad: np.ndarray,
                      upper_rad: np.ndarray) -> dict[str, np.ndarray]:
     """PartnerScript's postures for a grasp: ``grasp_q`` the solved posture; ``open_q`` the
@@ -390,19 +403,6 @@ def partner_postures(grasp: Grasp, lower_rad: np.ndarray,
         effort_dir[PARTNER_JOINTS.index(joint)] = 0.0
     q_max = np.asarray(upper_rad, float) - np.radians(GRIP_LIMIT_MARGIN_DEG)
     return {"open_q": open_q, "grasp_q": grasp_q, "effort_dir": effort_dir, "q_max": q_max}
-
-
-#: The thumb joints that hold the grasp's posture instead of taking the grip effort: the thumb
-#: presses onto the other hand's back from its base (the CMC), its MCP and IP keep their angles
-#: (assumption). With the flexion offset on all three, the fingers of the largest partners
-#: (216 mm long) closed over the thumb's tip and pushed its MCP and IP onto their stops, 1-1.5 mm
-#: into the fingers, once the palms lie parallel (reports/palm-alignment.md).
-THUMB_HOLDS = ("thumb_mcp", "thumb_ip")
-#: How far inside its range the grip effort may flex a digit joint (deg; ``q_max``): a digit that
-#: meets nothing does not curl onto its stop (a fist). Assumption, 7 deg: with the grasp's own
-#: 10 deg (GraspSettings.limit_margin_deg) the longest, narrowest partner (216 x 73 mm), whose
-#: fingers wrap the other hand to that bound, held its grip 16 % short at full effort.
-GRIP_LIMIT_MARGIN_DEG = 7.0
 
 
 #: How far from the paper's subjects' mean a partner's hand may be, in standard deviations (Table 1).

@@ -127,10 +127,10 @@ class GraspSettings:
             (1.4 deg) and they press each other through the handshake (palm on palm 4-5 % of
             the force between the hands, seeds 0-4). At 0.02, the weight before, the grasp
             rolled the partner's palm 14.5 deg onto one edge of the prosthetic palm and the
-            palms carried 0.0 % (reports/palm-alignment.md compares 0.02 and 0.2; 0.3 in its history). With
-            the palms parallel the largest partners' fingers close over their own thumb on the
-            other hand's back: the partner's thumb holds its MCP and IP and its grip may flex a
-            joint to 7 deg from its stop (softhand.envs.partner.THUMB_HOLDS,
+            palms carried 0.0 % (reports/palm-alignment.md compares 0.02 and 0.2; 0.3 in its
+            history). With the palms parallel the largest partners' fingers close over their
+            own thumb on the other hand's back: the partner's thumb holds its MCP and IP and its
+            grip may flex a joint to 7 deg from its stop (softhand.envs.partner.THUMB_HOLDS,
             GRIP_LIMIT_MARGIN_DEG).
     """
 
@@ -158,7 +158,7 @@ _PRUNE_M = 1e-6
 _MU_FACTOR = 10.0 ** 0.5
 #: The hops after the starts (`_hop`): each perturbs the best grasp found by a normal draw of
 #: these scales (the partner's position, its rotation vector, every joint), times the next of
-#: _HOP_TIERS in turn, from a generator seeded _HOP_SEED, solves the contact stage from there,
+#: _HOP_TIERS in turn, from a generator of one of _HOP_SEEDS, solves the contact stage from there,
 #: and keeps a cheaper answer; the search stops after _HOP_PATIENCE hops in a row find nothing
 #: cheaper (by _HOP_GAIN, relative), or at _HOP_MAX. The minima the starts leave lie a few
 #: degrees apart (a finger on one side of a neighbour or the other, 0.1-3 % in cost), some up to
@@ -171,7 +171,6 @@ _MU_FACTOR = 10.0 ** 0.5
 #: 2.1 % dearer; finite differences start in a basin 23 % dearer); narrow hops alone missed the
 #: 159 x 107 mm corner's minimum 15 % cheaper. A grasp costs about 6-21 s with the two
 #: searches of _HOP_SEEDS (1.5-2.5 s with the starts alone; then it is cached).
-_HOP_SEED = 0
 #: The hop searches of a grasp, one per seed from the same cheapest start; the grasp is the
 #: cheapest they reach. With the palms held parallel (palm_align_weight 0.2) the minima lie
 #: further apart: one search (seed 0) left two partners near the experimenter's size
@@ -788,7 +787,7 @@ def _solve_starts(problem: _Problem, settings: GraspSettings, *,
 
 
 def _hop(problem: _Problem, settings: GraspSettings, best: tuple[float, np.ndarray, list[int]],
-         *, finite_differences: bool = False, seed: int = _HOP_SEED,
+         *, seed: int, finite_differences: bool = False,
          ) -> tuple[float, np.ndarray, list[int]]:
     """From the cheapest start, hops to cheaper minima nearby (the constants' comment): (cost,
     variables, iterations per stage: the starts' two, then the last kept hop's)."""
