@@ -91,7 +91,7 @@ def test_materials_file_top_level_and_valid_constants():
     ("pocket2-sil", {"height_mm": 1e6}, ["height_mm = 1000000.0: expected a finite number in [6, 12]"]),
     ("pocket2-sil", {"height_mm": 0.0}, ["height_mm = 0.0: expected a finite number in [6, 12]"]),
     ("pocket2-sil", {"width_mm": NAN}, ["width_mm = nan: expected a finite number in [12, 20]"]),
-    ("pocket2-sil", {"length_mm": INF}, ["length_mm = inf: expected a finite number in [5, 10]"]),
+    ("pocket2-sil", {"length_mm": INF}, ["length_mm = inf: expected a finite number in [5, 60]"]),
     ("pocket2-sil", {"outer_layer_mm": -0.8},
      ["outer_layer_mm = -0.8: expected a finite number in [0.2, 2]"]),
     ("pocket2-sil", {"pocket_roof_mm": "1.4"},

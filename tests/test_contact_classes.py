@@ -17,6 +17,7 @@ from softhand.skin.contact_classes import (
     geom_shape,
     partner_tissue_class,
     shape_ratio,
+    tissue_class_data_range,
     tissue_class_law,
     tissue_counterpart,
 )
@@ -100,6 +101,34 @@ def test_a_tissue_class_law_is_the_plate_law_times_the_tissue_fe_ratio():
         tissue_class_law(tissue, "palm/finger")
     assert [partner_tissue_class(k) for k in CLASSES] == [
         "phalanx/finger", "phalanx/finger", "phalanx/flat", "phalanx/flat", "phalanx/finger"]
+
+
+def test_a_tissue_class_law_is_calibrated_to_where_the_tissue_s_data_end():
+    """The tissue's data (the plate's, to 7 N) end at a depth; a class law of ratio 0.6 there
+    is calibrated to 0.6 x 7 N, not 7 N; no deeper than both FE ramps reach; the plate class to
+    the data's own force. The shipped pair laws carry these ranges: where a prosthetic phalanx
+    or border presses the partner (the tissue's finger class, 0.69 x 7 = 4.8 N), where a palm
+    face does (its plate class, 7 N)."""
+    from softhand.skin.files import load_calibration
+
+    tissue = reference_law(HUMAN)
+    d = np.linspace(0.0, 8.0, 200)
+    plate = Curve(d / 0.5, d, 0.2 * d ** 2, np.zeros(d.size, bool), label="plate")
+    finger = Curve(d / 0.5, d, 0.12 * d ** 2, np.zeros(d.size, bool), label="finger")
+    law = tissue_class_law(tissue, "phalanx/finger", plate, finger)
+    assert tissue_class_data_range(tissue, "phalanx/finger", law, plate, finger) == pytest.approx(
+        0.6 * 7.0, rel=0.02)
+    assert tissue_class_data_range(tissue, "phalanx/flat", tissue) == pytest.approx(7.0)
+    short = Curve(d[:80] / 0.5, d[:80], 0.12 * d[:80] ** 2, np.zeros(80, bool), label="short")
+    depth = short.displacement_mm[-1]  # 3.2 mm, short of the data's 6.2 mm
+    law = tissue_class_law(tissue, "phalanx/finger", plate, short)
+    assert tissue_class_data_range(tissue, "phalanx/finger", law, plate, short) == pytest.approx(
+        float(law.elastic.force(depth)))
+    cal = load_calibration("pocket2-sil")
+    tops = {k: c.pair.calibrated_max_N for k, c in cal.pair_laws.items()}
+    assert tops["palm/flat"] == tops["palm/finger"] == pytest.approx(7.0)  # tissue: a flat's
+    for key in ("phalanx/flat", "phalanx/finger", "border/finger"):  # tissue: a finger's
+        assert tops[key] == pytest.approx(4.8, abs=0.1), key
 
 
 @pytest.fixture(scope="module")

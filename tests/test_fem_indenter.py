@@ -197,3 +197,37 @@ def test_a_crossing_cylinder_runs_on_the_full_model_continuous_in_the_angle():
     assert at[89.9] == pytest.approx(at[90], rel=1e-4)
     assert at[0.1] == pytest.approx(at[0], rel=1e-4)
     assert at[90] < at[45] < at[0]
+
+
+def test_a_long_part_keeps_the_phalanx_mesh_under_the_plate_and_grows_to_its_ends():
+    """A part longer than the plate (a stand-in for a long rounded edge): the same elements as
+    the 10 mm phalanx over the central 10 mm (a mesh line where the plate's face ends), then
+    elements growing to the end; a plate presses that central length only; a 2D section is
+    refused naming the field."""
+    spec = MESH_LEVELS["default"]
+    short = build_mesh(parse_design("pocket2-sil").geometry(), spec)
+    long = build_mesh(parse_design("pocket2-sil").geometry(length_mm=40.0), spec)
+    z_short, z_long = np.unique(short.X[:, 2].round(9)), np.unique(long.X[:, 2].round(9))
+    np.testing.assert_allclose(z_long[:len(z_short)], z_short, atol=1e-9)
+    assert z_long.max() == pytest.approx(20.0)
+    steps = np.diff(z_long[::2])  # element edges (quadratic: every other node line)
+    assert np.all(np.diff(steps[spec.n_length - 1:]) > 0)  # growing beyond the plate
+    assert (short.plate_half_mm, long.plate_half_mm) == (None, (10.0, 5.0))
+    whole = full_model(long)
+    J = np.einsum("qnk,end->eqdk", whole.ref.dN, whole.X[whole.elements])
+    assert np.linalg.det(J).min() > 0
+    with pytest.raises(ValueError, match=r"length_mm = 40: a 2D section is as long as the plate"):
+        build_mesh(parse_design("pocket2-sil").geometry(length_mm=40.0), spec, dim=2)
+
+
+@pytest.mark.slow
+def test_a_part_long_enough_for_its_contact_has_converged_in_length():
+    """A finger-sized cylinder across a rounded edge (coarse, elastic, 1.5 mm): a 40 mm part
+    gives the 60 mm part's force within 1 % (0.4 % measured: its ends are too far to matter), while the
+    paper's 10 mm phalanx, whose free ends the contact reaches, is softer by over 5 % (22 %)."""
+    base = dict(mesh="coarse", elastic_only=True, hold_s=0.0, threads=1, max_depth_mm=1.5,
+                max_force_N=50.0, indenter="cylinder:9@90", sensors=())
+    f = {L: indent("solid-sil", IndentationSettings(**base, geometry={
+        "width_mm": 20.0, "height_mm": 8.0, "length_mm": L})).force_at(1.5) for L in (10, 40, 60)}
+    assert f[40] == pytest.approx(f[60], rel=1e-2)
+    assert f[10] < 0.95 * f[60]

@@ -7,16 +7,18 @@
 the prosthetic palm's one convex surface (radius 8-23 mm, median 13.6, p10-p90), pressed by the
 partner's fingers. Those pairs carry the ``border/finger`` law (`softhand.skin.contact_classes`:
 the FE's stand-in of the border, the phalanx section widened to width 20 mm and height 8 mm, a
-half ellipse of radius a^2 / b = 12.5 mm at its top, the design's layers and pocket as on the
-phalanx, 8 mm of skin over a flat bone, under a cylinder of radius 9 mm across it, to 20 N in
-3D: `calibration/fe/border-finger/`). This runs that FE again for each design and sets three
+half ellipse of radius a^2 / b = 12.5 mm at its top, 40 mm long as a palm's border is long
+beside a finger, the design's layers and pocket as on the phalanx, 8 mm of skin over a flat
+bone, under a cylinder of radius 9 mm across it, to 20 N in 3D: `calibration/fe/border-finger/`).
+This runs that FE again for each design and sets three
 laws against it: the border/finger law (its own class's), the palm/finger law (an FE cylinder
 across a flat slab of the design's layers over the metacarpals: what the border's pairs carried
 before they had a law of their own) and the phalanx/finger law (its elastic force on the FE's
 ramp history, with its relaxation), as the RMS and largest difference in % of 2 N over the FE's
 0-2 N and 0-20 N. For pocket2-sil, the border's radius moved (width 20 mm, height 7.7 mm: 13.0
-mm, and 9 mm: 11.1 mm; a flatter section leaves its flanks too tight for a 2 mm pocket's layers)
-and the finger crossing the border at 30, 45, 60 and 90 deg (the handshake's fingers cross it at
+mm, and 9 mm: 11.1 mm; a flatter section leaves its flanks too tight for a 2 mm pocket's layers),
+its length moved (the paper's 10 mm phalanx, the stand-in before, and 60 mm) and the finger
+crossing the border at 30, 45, 60 and 90 deg (the handshake's fingers cross it at
 30-90 deg; below 90 deg the FE runs the whole phalanx, 4x the elements). Writes ``OUT.md`` and
 ``OUT.json``.
 
@@ -41,7 +43,10 @@ from softhand.skin.contact_classes import BORDER_GEOMETRY, FINGER_RADIUS_MM, IND
 from softhand.skin.files import load_calibration
 
 BORDER = dict(BORDER_GEOMETRY)
-RADII = ({"width_mm": 20.0, "height_mm": 7.7}, {"width_mm": 20.0, "height_mm": 9.0})
+#: the border's radius moved, and its length: the paper's 10 mm phalanx (the stand-in before: the
+#: finger's contact reaches its free ends) and 60 mm (the 40 mm stand-in has converged)
+RADII = ({**BORDER, "height_mm": 7.7}, {**BORDER, "height_mm": 9.0},
+         {**BORDER, "length_mm": 10.0}, {**BORDER, "length_mm": 60.0})
 FINGER = INDENTERS["finger"]
 CROSSINGS_DEG = (30.0, 45.0, 60.0)
 LAWS = ("border/finger", "palm/finger", "phalanx/finger")
@@ -195,7 +200,8 @@ def markdown(d: dict) -> str:
     lines = ["# The palm's rounded border against the laws that could carry it", "",
              "`python tools/border_law_error.py --out reports/border-law-error --handshake`: the "
              "FE's stand-in of the palm's rounded border (the phalanx section widened to width "
-             f"{d['border']['width_mm']:g} mm, height {d['border']['height_mm']:g} mm: a "
+             f"{d['border']['width_mm']:g} mm, height {d['border']['height_mm']:g} mm, "
+             f"{d['border'].get('length_mm', 10.0):g} mm long: a "
              "12.5 mm top radius, the median border the partner's fingers press in the default "
              f"handshake being 13.6 mm, `reports/contact-geometry.md`) under the finger "
              f"({d['finger']}), 3D, to 20 N, against the border/finger law fitted to it (the "
@@ -220,9 +226,9 @@ def markdown(d: dict) -> str:
                      f"{_cell(e.get('border/finger'), '20')} | {_cell(pf, '2')} | "
                      f"{_cell(pf, '20')} | {at} | {_cell(e['phalanx/finger'], '2')} | "
                      f"{_cell(e['phalanx/finger'], '20')} |")
-    lines += ["", "pocket2-sil with the border's radius moved and with the finger crossing it at "
-              "other angles than the law's 90 deg (the same laws):", "",
-              "| border (width x height mm) | top radius mm | crossing deg | FE d(2 N) mm | "
+    lines += ["", "pocket2-sil with the border's radius or length moved and with the finger "
+              "crossing it at other angles than the law's 90 deg (the same laws):", "",
+              "| border (width x height x length mm) | top radius mm | crossing deg | FE d(2 N) mm | "
               "border/finger law, 0-2 N | 0-20 N | palm/finger law, 0-2 N | phalanx/finger law, "
               "0-2 N |", "|---|---|---|---|---|---|---|---|"]
     cases = ([(r["geometry"], 90.0, r) for r in d["radii"]]
@@ -230,7 +236,8 @@ def markdown(d: dict) -> str:
     for g, angle, r in cases:
         fe = r["fe"]
         rad = (g["width_mm"] / 2) ** 2 / g["height_mm"]
-        head = f"| {g['width_mm']:g} x {g['height_mm']:g} | {rad:.1f} | {angle:g} |"
+        head = (f"| {g['width_mm']:g} x {g['height_mm']:g} x {g.get('length_mm', 10.0):g} | "
+                f"{rad:.1f} | {angle:g} |")
         if "error" in fe:
             lines.append(f"{head} FE stopped | | | | |")
             continue

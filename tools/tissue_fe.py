@@ -115,6 +115,10 @@ def main() -> None:
     ap.add_argument("--classes", default=None, metavar="DIR",
                     help="write the tissue's FE curve of every contact class into DIR")
     ap.add_argument("--force", action="store_true", help="with --classes: replace DIR")
+    ap.add_argument("--only", default=None, metavar="CLASS",
+                    help="with --classes: run that class again into DIR with the mu and alpha "
+                         "DIR's summary records (e.g. after its FE body changed), the other "
+                         "classes kept")
     ap.add_argument("--report-only", action="store_true",
                     help="with --classes: write OUT's report again from DIR (no FE runs)")
     a = ap.parse_args()
@@ -146,6 +150,16 @@ def main() -> None:
                 sys.exit(f"--classes {a.classes}: no summary.json there (run without "
                          "--report-only first)")
             write_classes_report(folder, out)
+            return
+        if a.only is not None:
+            from softhand.skin.contact_classes import CLASSES
+
+            if a.only not in CLASSES:
+                sys.exit(f"--only {a.only}: allowed {', '.join(CLASSES)}")
+            if not (folder / "summary.json").is_file():
+                sys.exit(f"--classes {a.classes}: no summary.json there (run without --only "
+                         "first)")
+            update_class(folder, a.only, out, " ".join(sys.argv[1:]))
             return
         if not folder.parent.is_dir():
             sys.exit(f"--classes {a.classes}: folder {folder.parent} does not exist")
@@ -396,6 +410,38 @@ def write_classes(folder: Path, alpha: float, out: Path, argv: str) -> None:
     finally:
         shutil.rmtree(stage, ignore_errors=True)
     say(f"wrote {folder}")
+    write_classes_report(folder, out)
+
+
+def update_class(folder: Path, key: str, out: Path, argv: str) -> None:
+    """Run class ``key`` again with the mu and alpha of ``folder``'s summary and replace its
+    curve, hash, settings and result there (the summary records the command), then the ratio
+    report. The files are written whole or not at all (`softhand.io.atomic_write_text`)."""
+    import hashlib
+    from datetime import datetime, timezone
+
+    from softhand.io import atomic_write_text
+    from softhand.skin.contact_classes import tissue_curve_file
+
+    where = folder / "summary.json"
+    summary = json.loads(where.read_text(encoding="utf-8"))
+    prov = summary["provenance"]
+    mu, alpha = prov["material"]["mu_kPa"] * 1e-3, prov["material"]["alpha"]
+    t0 = time.perf_counter()
+    t, d, f, end, keep = _class_run(key, mu, alpha)
+    print(f"{key}: {end} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
+    text = _csv(t, d, f)
+    name = tissue_curve_file(key)
+    prov["settings"][key] = keep
+    prov["curve_sha256"][Path(name).stem] = hashlib.sha256(text.encode()).hexdigest()
+    prov.setdefault("updates", []).append({
+        "class": key, "command": f"python tools/tissue_fe.py {argv}",
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "wall_s": time.perf_counter() - t0})
+    summary["classes"][key] = {"file": name, "end": end, "max_force_N": float(f.max()),
+                               "max_depth_mm": float(d.max())}
+    atomic_write_text(folder / name, text)
+    atomic_write_text(where, json.dumps(summary, indent=1) + "\n")
     write_classes_report(folder, out)
 
 

@@ -566,7 +566,7 @@ class TwoHandTouchEnv(gym.Env):
                 f"{summary['contact_steps']} contact-steps on {summary['pairs']} pair(s) beyond "
                 f"their law's calibrated range; the worst, pair {summary['worst_pair']}, carried "
                 f"{summary['worst_force_N']:.2f} N at t = {summary['worst_time_s']:.2f} s "
-                f"against the {summary['worst_limit_N']:g} N its law ({law}) is calibrated to: "
+                f"against the {summary['worst_limit_N']:.2f} N its law ({law}) is calibrated to: "
                 "the force above that is an extrapolation")
         if summary["bone_steps"]:
             parts.append(f"a bone bottomed out under a region in {summary['bone_steps']} "

@@ -27,7 +27,8 @@ from softhand.fem.materials import MATERIAL_NAMES
 from softhand.paper import paper
 from softhand.validate import check_number, show
 
-__all__ = ["DESIGNS", "GEOMETRY_RANGES", "POCKET_FIELDS", "TOPOLOGIES", "Design", "PhalanxGeometry", "parse_design"]
+__all__ = ["DESIGNS", "GEOMETRY_RANGES", "PLATE_LENGTH_MM", "PLATE_WIDTH_MM", "POCKET_FIELDS", "TOPOLOGIES", "Design",
+           "PhalanxGeometry", "parse_design"]
 
 TOPOLOGIES = ("solid", "pocket1", "pocket2")
 _POCKET_HEIGHT = {"solid": 0.0, "pocket1": 1.0, "pocket2": 2.0}
@@ -51,13 +52,18 @@ _D = _geometry_defaults()
 GEOMETRY_RANGES: dict[str, tuple[float, float]] = {
     "width_mm": (12.0, 20.0),  # finger phalanges; at most the indenter's 20 mm width
     "height_mm": (6.0, 12.0),  # the paper's 9 mm +- 3 mm; >= 6 leaves the bands and a core
-    "length_mm": (5.0, 10.0),  # at most the indenter's 10 mm, which must cover the phalanx
+    # the paper's 10 mm and shorter; longer (a palm's rounded border, `softhand.skin.
+    # contact_classes`) for curved indenters, or under the plate's central 10 mm (`PLATE_LENGTH_MM`)
+    "length_mm": (5.0, 60.0),
     "outer_layer_mm": (0.2, 2.0),  # a coating (0.2 mm) to a thick layer; < pocket_roof_mm
     "profile_exponent": (2.0, 3.0),  # half ellipse to boxy; see PhalanxGeometry
     "pocket_height_mm": (0.0, 6.0),  # 0: no pocket; else >= MIN_POCKET_MM and under the roof
     "pocket_roof_mm": (0.5, 3.0),  # skin above the pocket (and the top band of a solid design)
     "pocket_half_width_mm": (0.5, 9.5),  # inside the side walls (relation below)
 }
+#: The paper's plate (mm; 20 x 10): it covers a phalanx up to this wide and this long
+PLATE_WIDTH_MM = 20.0
+PLATE_LENGTH_MM = 10.0
 MIN_POCKET_MM = 0.25  # thinnest pocket: thinner is a slit that closes before the ramp starts
 _TOP_BAND_MM = 2.0  # band meshed under the roof of a solid design (or a pocket under 2 mm)
 _CURVATURE_FRACTION = 0.75  # deepest band / smallest radius of curvature (mesh-scan limit)
@@ -80,7 +86,11 @@ class PhalanxGeometry:
     Attributes:
         width_mm: across the finger (paper: 16), in [12, 20] (at most the indenter's 20 mm).
         height_mm: base (bone) to the top of the skin (paper: 9), in [6, 12].
-        length_mm: along the finger (paper: 10), in [5, 10]; the indenter (20 x 10) covers it.
+        length_mm: along the finger (paper: 10), in [5, 60]. Up to `PLATE_LENGTH_MM` the paper's
+            20 x 10 mm plate covers the part; a longer part (a stand-in for a long rounded edge,
+            such as a palm's border pressed by a finger crossing it at an angle) is meshed
+            finer over its central `PLATE_LENGTH_MM` than beyond (`softhand.fem.mesh`), and a
+            plate presses only that central length. 3D only: a 2D section is as long as the plate.
         outer_layer_mm: outer layer thickness (paper: 0.8), in [0.2, 2] and < pocket_roof_mm.
         profile_exponent: superellipse exponent n of the outer profile, in [2, 3] (unstated;
             default 2, a half ellipse, the simplest rounded section with the paper's width and

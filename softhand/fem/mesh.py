@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from softhand.fem.elements import ReferenceElement, reference_element
-from softhand.fem.geometry import PhalanxGeometry
+from softhand.fem.geometry import PLATE_LENGTH_MM, PLATE_WIDTH_MM, PhalanxGeometry
 
 __all__ = ["MESH_LEVELS", "Mesh", "MeshSpec", "build_mesh", "face_element", "full_model"]
 
@@ -213,9 +213,13 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
     nk, ni = grid.shape[:2]
     ek, ei = (nk - 1) // 2, (ni - 1) // 2
     if dim == 3:
-        z = _with_midpoints(np.linspace(0.0, 0.5 * geom.length_mm, spec.n_length + 1))
-        ez = spec.n_length
+        edges = _length_edges(0.5 * geom.length_mm, spec.n_length)
+        z = _with_midpoints(edges)
+        ez = len(edges) - 1
     else:
+        if geom.length_mm > PLATE_LENGTH_MM:
+            raise ValueError(f"length_mm = {geom.length_mm:g}: a 2D section is as long as the "
+                             f"plate, at most {PLATE_LENGTH_MM:g} mm; use mode 3d")
         z = np.zeros(1)
         ez = 1
     nz = len(z)
@@ -282,7 +286,33 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
         wall_faces=wall_faces,
         symmetry_factor=2.0 if dim == 2 else 4.0,
         length_mm=geom.length_mm if dim == 2 else 1.0, spec=spec,
+        plate_half_mm=(0.5 * PLATE_WIDTH_MM, 0.5 * PLATE_LENGTH_MM)
+        if geom.length_mm > PLATE_LENGTH_MM else None,
     )
+
+
+#: Growth of the elements along a part longer than the plate, beyond its central PLATE_LENGTH_MM
+LENGTH_GROWTH = 1.5
+
+
+def _length_edges(half_mm: float, n: int) -> np.ndarray:
+    """Element edges along the half length: ``n`` equal elements, as on the paper's 10 mm
+    phalanx; on a longer part, ``n`` equal elements over the central half plate length (a mesh
+    line where a plate's face ends), then elements growing by `LENGTH_GROWTH` to the end (the
+    last ones scaled to land on it)."""
+    core = 0.5 * PLATE_LENGTH_MM
+    if half_mm <= core + 1e-9:
+        return np.linspace(0.0, half_mm, n + 1)
+    h = core / n
+    steps: list[float] = []
+    while core + sum(steps) < half_mm - 1e-9:
+        steps.append(h * LENGTH_GROWTH ** (len(steps) + 1))
+    # scale the growing elements so that they end at the part's end (a last one under half its
+    # predecessor's planned size is merged into it)
+    if len(steps) > 1 and core + sum(steps[:-1]) + 0.5 * steps[-1] >= half_mm:
+        steps.pop()
+    tail = np.cumsum(steps) * (half_mm - core) / sum(steps)
+    return np.concatenate([np.linspace(0.0, core, n + 1), core + tail])
 
 
 def compact_nodes(coords: np.ndarray, elems: np.ndarray, keep: np.ndarray

@@ -56,6 +56,7 @@ from softhand.skin.contact_classes import (
     class_curve,
     fit_class_law,
     partner_tissue_class,
+    tissue_class_data_range,
     tissue_class_law,
     tissue_counterpart,
     tissue_curve_file,
@@ -674,7 +675,9 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
     (``design`` `HUMAN`, the sensored human hand) is `tissue_class_law` of the tissue FE's
     curves. A class without its curve, or whose tissue side lacks the tissue FE's curves
     (``tissue_fe_dir``'s `TISSUE_FE_FOLDER`, default ``fe_dir``'s), is left out.
-    ``fe_design`` and ``tissue_fe_dir``: as in `calibrate_design`."""
+    ``fe_design`` and ``tissue_fe_dir``: as in `calibrate_design`. A pair law is calibrated up
+    to where both its laws rest on data: a tissue class law to its force at the depth where the
+    tissue's plate data end (`tissue_class_data_range`), a design's to its FE curve's end."""
     from softhand.fem.sweep import read_summary
 
     root = Path(fe_dir)
@@ -690,8 +693,13 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
     human = design == HUMAN
     plate = None if human else read_summary(root)
     out: dict[str, ClassLaw] = {}
+
+    def data_range(key: str, law: SkinLaw) -> float:  # the tissue class law's data range
+        return tissue_class_data_range(tissue, key, law, tplate, tcurves.get(key))
+
     for key in CLASSES:
-        t = tissue_law(partner_tissue_class(key))
+        t_key = partner_tissue_class(key)
+        t = tissue_law(t_key)
         if human:
             skin = tissue_law(key)  # the plate's: the paper's law itself, its own curve
             curve = plate_curve if key == PLATE_CLASS else tcurves.get(key)
@@ -706,9 +714,10 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
         if not human:
             skin = law if key == PLATE_CLASS else fit_class_law(design, key, law, curve)
         top = _law_top(skin, TABLE_MAX_N if human else float(curve.force_N.max()))
-        pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=DATA_MAX_N.get(design, top),
-                            tissue_top_N=TABLE_MAX_N, tissue_data_N=DATA_MAX_N[HUMAN],
-                            reference_mass_kg=reference_mass_kg, initial=initial)
+        pair = fit_pair_law(skin, t, skin_top_N=top, skin_data_N=data_range(key, skin) if human
+                            else DATA_MAX_N.get(design, top), tissue_top_N=TABLE_MAX_N,
+                            tissue_data_N=data_range(t_key, t), reference_mass_kg=reference_mass_kg,
+                            initial=initial)
         out[key] = ClassLaw(key, skin, pair, INDENTERS[key.split("/")[1]],
                             tissue_counterpart(key), {"label": curve.label,
                                                       "sha256": curve.sha256, "mesh": mesh})

@@ -26,8 +26,12 @@ the same cylinder across a rounded palm border (``border-finger/``, class ``bord
   the median border's within 1.1 mm; the design's layers and pocket as on the phalanx, over a
   flat bone), pressed by the same finger across it: a stated stand-in, whose radius moved to
   13.0 and 11.1 mm changes pocket2-sil's depth at 2 N by -2 % and +7 %
-  (`reports/border-law-error.md`). A pair's body is a border when the handshake's grasp puts
-  the finger on the border (`softhand.envs.skins.border_pairs`), not from the geoms' types.
+  (`reports/border-law-error.md`). The stand-in is 40 mm long, as a palm's border is long
+  beside a finger: the finger's contact reaches the ends of the paper's 10 mm phalanx (its free
+  ends then bulge: pocket2-sil's force at 2 mm 13 % low), while 40 and 60 mm give the same
+  curve within 0.1 % (`softhand.fem.geometry.PhalanxGeometry.length_mm`). A pair's body is a
+  border when the handshake's grasp puts the finger on the border
+  (`softhand.envs.skins.border_pairs`), not from the geoms' types.
 A class's skin law keeps the plate law's relaxation (quasi-linear viscoelasticity: the
 relaxation function is the material's, the elastic law the shape's) and fits its own elastic law
 to the class's FE ramp (`fit_class_law`).
@@ -44,7 +48,10 @@ that FE's force ratio, class over plate, at the same depth (`tissue_class_law`):
 fixes the plate's curve, the tissue's own FE its shape. No published indentation data with
 curved indenters on the middle phalanx, or of the palm's border, were found; the ratio is the
 FE's prediction, and the layer's constants are assumptions (`TISSUE_FE_FOLDER`'s summary
-records them).
+records them). The tissue's data (a flat plate to 7 N) end at a depth, 6.24 mm; a class's law
+rests on them to that depth, not to that force (`tissue_class_data_range`): the finger class
+(0.69 x the plate's force) is calibrated to 4.8 N, the border class to 9.5 N, and the palm
+slab's (its FE stops at 2.07 mm) to 3.9 N.
 
 * the partner's tissue side of a pair is pressed by the skin's body: a prosthetic phalanx (or
   a rounded border, of a finger's radius) like a finger, a palm face like a flat
@@ -70,7 +77,7 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 __all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS",
            "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_FE_FOLDER",
            "class_curve", "classify", "fit_class_law", "geom_shape", "partner_tissue_class",
-           "shape_ratio", "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
+           "shape_ratio", "tissue_class_data_range", "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
@@ -93,7 +100,7 @@ FE_FOLDERS = {"phalanx/flat": "", "phalanx/finger": "finger", "palm/flat": "palm
 FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
 #: palm's rounded border (module docstring)
-BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0}
+BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0, "length_mm": 40.0}
 #: the folder under the FE root with the human tissue's FE curves, one file per class
 #: (`tissue_curve_file`) and a summary.json that records them (module docstring)
 TISSUE_FE_FOLDER = "tissue"
@@ -184,6 +191,25 @@ def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
     source = {**tissue.source, "shape_factor": f"tissue FE {key} / plate ({other.label} / "
               f"{plate.label})"}
     return SkinLaw(f"{tissue.name} ({key})", elastic, tissue.prony, source=source)
+
+
+def tissue_class_data_range(tissue: SkinLaw, key: str, law: SkinLaw, plate: Curve | None = None,
+                        other: Curve | None = None, data_N: float | None = None) -> float:
+    """The force up to which ``law``, the tissue's law in class ``key`` (`tissue_class_law`),
+    rests on data. The tissue's data are the plate's (``data_N``, default `DATA_MAX_N` of the
+    tissue: the force range over which its exponential was confirmed), so they end at a depth,
+    the plate law's at ``data_N``; a class's law is the plate's times the FE's ratio at the same
+    depth, so its data end at that depth too, and no deeper than both FE ramps reach (beyond
+    it the ratio is a held value, `shape_ratio`). Its force there: a finger class, softer than
+    the plate (ratio 0.7), is calibrated to about 0.7 x ``data_N``, not to ``data_N``."""
+    from softhand.laws.references import DATA_MAX_N, HUMAN
+
+    top_N = DATA_MAX_N[HUMAN] if data_N is None else float(data_N)
+    depth = float(tissue.elastic.displacement_at(top_N))
+    if key != PLATE_CLASS and plate is not None and other is not None:
+        depth = min(depth, float(plate.displacement_mm[plate.peak_index]),
+                    float(other.displacement_mm[other.peak_index]))
+    return float(law.elastic.force(depth))
 
 
 def shape_ratio(plate: Curve, other: Curve):
