@@ -124,7 +124,9 @@ def test_result_bookkeeping_and_interpolation():
 
 
 @pytest.mark.parametrize("bad", [dict(max_indefinite=0), dict(max_indefinite=1.5),
-                                 dict(max_newton=0)])
+                                 dict(max_newton=0), dict(indefinite_shift=0.0),
+                                 dict(indefinite_shift=float("nan")), dict(line_searches=-1),
+                                 dict(line_searches=1.5)])
 def test_bad_newton_limits_are_refused(bad):
     (name, _value), = bad.items()
     with pytest.raises(ValueError, match=name):
@@ -165,3 +167,93 @@ def test_max_indefinite_cuts_first_tries_only_and_keeps_the_equilibria(monkeypat
     for depth in (1.0, 2.0):
         assert depth in cut.displacement_mm and depth in plain.displacement_mm
         assert cut.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)
+
+
+def test_a_shifted_cholesky_keeps_the_equilibria_without_the_indefinite_factorization(
+        monkeypatch):
+    """With every tangent's Cholesky refused and its shifted one accepted, ``indefinite_shift``
+    solves each Newton step by the shifted tangent, never by SuperLU: the steps converge more
+    slowly, to the same equilibria (the forces where both runs land on 1 mm and 2 mm)."""
+    from softhand.fem import linear
+
+    s = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, max_force_N=0.7,
+                            elastic_only=True, solver="cholmod", contact_points=2, tol_N=1e-7,
+                            tol_rel=0.0)  # converged tightly: shifted steps converge linearly
+    plain = indent("pocket2-sil", s)
+    factorize, calls = linear._Cholmod.factorize, []
+
+    def every_other(self, vals):  # TangentSystem.factorize: a tangent, then its shifted try
+        calls.append(len(calls))
+        if len(calls) % 2:
+            raise linear._NotPositiveDefiniteError("forced by the test")
+        return factorize(self, vals)
+
+    def no_lu(self, vals):
+        raise AssertionError("the indefinite factorization was called")
+
+    monkeypatch.setattr(linear._Cholmod, "factorize", every_other)
+    monkeypatch.setattr(linear._Cholmod, "factorize_indefinite", no_lu)
+    shifted = indent("pocket2-sil", replace(s, indefinite_shift=1e-6))
+    assert len(calls) % 2 == 0 and len(calls) >= 2 * sum(r["iterations"] - 1
+                                                         for r in shifted.log) > 0
+    assert (sum(r["iterations"] for r in shifted.log)
+            >= sum(r["iterations"] for r in plain.log))
+    for depth in (1.0, 2.0):
+        assert depth in shifted.displacement_mm and depth in plain.displacement_mm
+        assert shifted.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)
+
+
+class _Spring:
+    """A stand-in for the solver's model: free residual ``r(u) = A u - b`` (linear, so the
+    secant root along an update is its exact minimum)."""
+
+    def __init__(self):
+        self.A = np.array([[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]])
+        self.b = np.array([1.0, -2.0, 0.5])
+        self.free = np.arange(3)
+
+    def residual(self, u, state, dt, d, pocket):
+        return (self.A @ u - self.b,)
+
+
+def test_the_line_search_lands_on_the_secant_root_of_an_overshooting_update():
+    """Three times the Newton update of a linear residual overshoots (s(0) = -3q, s(1) = 6q): the
+    secant root a = 1/3 is the Newton update itself, where the residual vanishes. The Newton
+    update alone does not overshoot (s(1) = 0) and is kept."""
+    from softhand.fem.solver import _Model
+
+    m, u = _Spring(), np.zeros(3)
+    r0 = m.residual(u, None, 0.0, 0.0, None)[0]
+    newton = -np.linalg.solve(m.A, r0)
+    out = _Model._line_search(m, u, 3.0 * newton, r0, m.residual(u + 3.0 * newton, None, 0.0,
+                                                                  0.0, None)[0],
+                              None, 0.0, 0.0, None)
+    assert out is not None
+    assert out[0] == pytest.approx(newton, rel=1e-12)
+    assert np.abs(out[1][0]).max() < 1e-12
+    assert _Model._line_search(m, u, newton, r0, m.residual(u + newton, None, 0.0, 0.0, None)[0],
+                               None, 0.0, 0.0, None) is None
+
+
+def test_line_searches_keep_the_equilibria(monkeypatch):
+    """``line_searches`` changes Newton's path, not where it lands: the forces at 1 mm and 2 mm
+    of pocket2-sil (2D, coarse: 4 searches as the pocket closes) agree with full updates within
+    the tolerance."""
+    from softhand.fem.solver import _Model
+
+    s = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, solver="cholmod",
+                            contact_points=2)
+    plain = indent("pocket2-sil", s)
+    search, taken = _Model._line_search, []
+
+    def counted(self, *args):
+        out = search(self, *args)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(_Model, "_line_search", counted)
+    searched = indent("pocket2-sil", replace(s, line_searches=2))
+    assert sum(taken) > 0
+    assert sum(r["iterations"] for r in searched.log) != sum(r["iterations"] for r in plain.log)
+    for depth in (1.0, 2.0):
+        assert searched.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)
