@@ -58,6 +58,13 @@ _DEPTH_MARKS_MM = (1.0, 2.0)
 #: projected afresh at its solution, at every closed point (mm). The penalty's own overlap is
 #: about 4e-4 mm at 2 N (pocket2-sil).
 POCKET_GAP_TOL_MM = 2e-5
+#: A line search (`IndentationSettings.line_searches`) scales only an update after which the
+#: residual's largest entry is this many times larger. On the soft designs' buckling roofs the
+#: whole update of a nearly singular tangent reached 1e4 to 1e32 times the residual; where a
+#: contact point opens or closes, full updates grew it up to 40-fold and still converged
+#: quadratically, which a search there slowed (3D checks of pocket2-sil and the design search's
+#: trials 245 and 262: 3-4 more iterations).
+LINE_SEARCH_GROWTH = 100.0
 #: Most passes of the pocket's linearisation in one Newton solve.
 POCKET_PASSES = 4
 #: A ramp that accepts more than CRAWL_STEPS steps in a row under CRAWL_STEP_MM (mm) stalls at a
@@ -128,12 +135,14 @@ class IndentationSettings:
             whole, the FE's default). An update ``du`` from ``u`` overshoots where the
             residual's component along it, ``s(a) = du . r(u + a du)``, changes sign over the
             whole update and grows to more than half its size at the start: ``s(0) < 0 <
-            -s(0) / 2 < s(1)``; it is then scaled by the secant root ``a = s(0) / (s(0) -
-            s(1))``, at least 0.1 (one more residual evaluation). On the soft designs' buckling
-            roofs, the whole update of a nearly singular tangent reached residuals of 1e4 to
-            1e32 N; the cap stops searches that cycle with a contact point opening and closing
-            (unlimited, a 3D step of the design search's trial 262 took 21 iterations instead
-            of 5). Like ``indefinite_shift``, it changes the path, not the equilibrium.
+            -s(0) / 2 < s(1)``, and the residual's largest entry grows `LINE_SEARCH_GROWTH`
+            times; it is then scaled by the secant root ``a = s(0) / (s(0) - s(1))``, at least
+            0.1 (one more residual evaluation). On the soft designs' buckling roofs, the whole
+            update of a nearly singular tangent reached residuals of 1e4 to 1e32 N. The cap
+            stops searches that cycle with a contact point opening and closing (without the
+            growth condition and unlimited, a 3D step of the design search's trial 262 took 21
+            iterations instead of 5). Like ``indefinite_shift``, it changes the path, not the
+            equilibrium.
         contact_points: Gauss points per face direction for contact (more: smoother contact).
         tol_N: Newton tolerance on the largest nodal residual, whole-phalanx newtons, plus
             ``tol_rel`` times the plate force, > 0. The default (1e-4 N + 1e-4 F) moves
@@ -581,9 +590,12 @@ class _Model:
         """The state at the secant root of ``s(a) = du . r(u + a du)`` and its residual
         (`residual`'s tuple) where the update ``du`` (free dofs) overshoots, with ``r0``, ``r1``
         the free residuals at ``a = 0`` and 1 (`IndentationSettings.line_searches`); None
-        where it does not, or where the root's state is inadmissible."""
+        where it does not, where the residual's largest entry grew less than
+        `LINE_SEARCH_GROWTH` times, or where the root's state is inadmissible."""
         s0, s1 = float(du @ r0), float(du @ r1)
         if not (s0 < 0.0 < -0.5 * s0 < s1):
+            return None
+        if np.abs(r1).max() < LINE_SEARCH_GROWTH * np.abs(r0).max():
             return None
         trial = u.copy()
         trial[self.free] += max(0.1, s0 / (s0 - s1)) * du
