@@ -52,9 +52,9 @@ def main() -> None:
     newton, factorize, residual = fe._Model.newton, linear.TangentSystem.factorize, \
         fe._Model.residual
 
-    def logged_factorize(self, vals):
+    def logged_factorize(self, vals, **kw):
         before = self.stats["cholesky"]
-        out = factorize(self, vals)
+        out = factorize(self, vals, **kw)
         kinds.append("c" if self.stats["cholesky"] > before else "I")
         return out
 
