@@ -138,7 +138,8 @@ class IndentationSettings:
             -s(0) / 2 < s(1)``, and the residual's largest entry grows `LINE_SEARCH_GROWTH`
             times; it is then scaled by the secant root ``a = s(0) / (s(0) - s(1))``, at least
             0.1 (one more residual evaluation). On the soft designs' buckling roofs, the whole
-            update of a nearly singular tangent reached residuals of 1e4 to 1e32 N. The cap
+            update of a nearly singular tangent reached residuals of 1e4 to 1e32 N; there the
+            root is far below 0.1, so such an update is cut to a tenth of itself. The cap
             stops searches that cycle with a contact point opening and closing (without the
             growth condition and unlimited, a 3D step of the design search's trial 262 took 21
             iterations instead of 5). Like ``indefinite_shift``, it changes the path, not the
