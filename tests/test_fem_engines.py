@@ -105,7 +105,8 @@ def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite(solver)
     full = K + G.T @ sp.diags(kw) @ G
     x = system.factorize(vals)(b)
     assert np.allclose(x, spla.spsolve(full.tocsc(), b), rtol=1e-10, atol=1e-12)
-    assert system.stats == {"cholesky": 1, "indefinite": 0, "superlu": 0, "analyses": 2}
+    assert system.stats == {"cholesky": 1, "indefinite": 0, "superlu": 0, "shifted": 0,
+                            "analyses": 2}
     # an indefinite tangent (a negative pivot) is solved by LU instead
     shifted = K - sp.identity(n) * (0.5 + 2.0 * spla.eigsh(B @ B.T, 1, which="SA")[0][0] + 1.0)
     data = np.asarray(shifted.tocsr()[rows, cols]).ravel()
@@ -114,6 +115,26 @@ def test_tangent_system_solves_like_scipy_and_falls_back_when_indefinite(solver)
     # CHOLMOD hands it to SuperLU, PARDISO to its own symmetric indefinite factorization
     fallback = "superlu" if solver == "cholmod" else "indefinite"
     assert system.stats[fallback] == 1 and system.stats["cholesky"] == 1
+    system.close()
+
+
+@pytest.mark.parametrize("solver", SOLVER_CASES)
+def test_a_shifted_tangent_is_the_tangent_plus_mu_times_the_identity(solver):
+    """K = [[1, 2], [2, 1]] (eigenvalues 3 and -1, mean |diagonal| 1): with shift 0.02 the tries
+    are K + 0.02 I, 0.2 I, 2 I, the third the first positive definite; with 1e-4 none of the 4
+    tries (up to 0.1 I) is, and the indefinite factorization solves K itself."""
+    K = np.array([[1.0, 2.0], [2.0, 1.0]])
+    rows, cols = np.nonzero(np.ones((2, 2)))
+    b = np.array([1.0, -3.0])
+    system = TangentSystem(rows, cols, np.arange(2), 2, [], solver=solver)
+    vals = system.values(K[rows, cols], [])
+    x = system.factorize(vals, shift=2e-2)(b)
+    assert np.allclose(x, np.linalg.solve(K + 2.0 * np.eye(2), b), rtol=1e-12)
+    assert system.stats["shifted"] == 1 and system.stats["cholesky"] == 0
+    x = system.factorize(vals, shift=1e-4)(b)
+    assert np.allclose(x, np.linalg.solve(K, b), rtol=1e-10)
+    assert system.stats["shifted"] == 1
+    assert system.stats["superlu" if solver == "cholmod" else "indefinite"] == 2
     system.close()
 
 

@@ -124,7 +124,9 @@ def test_result_bookkeeping_and_interpolation():
 
 
 @pytest.mark.parametrize("bad", [dict(max_indefinite=0), dict(max_indefinite=1.5),
-                                 dict(max_newton=0)])
+                                 dict(max_newton=0), dict(indefinite_shift=0.0),
+                                 dict(indefinite_shift=float("nan")), dict(line_searches=-1),
+                                 dict(line_searches=1.5)])
 def test_bad_newton_limits_are_refused(bad):
     (name, _value), = bad.items()
     with pytest.raises(ValueError, match=name):
@@ -165,3 +167,115 @@ def test_max_indefinite_cuts_first_tries_only_and_keeps_the_equilibria(monkeypat
     for depth in (1.0, 2.0):
         assert depth in cut.displacement_mm and depth in plain.displacement_mm
         assert cut.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)
+
+
+def test_a_shifted_cholesky_keeps_the_equilibria_without_the_indefinite_factorization(
+        monkeypatch):
+    """With every tangent's Cholesky refused and its shifted one accepted, ``indefinite_shift``
+    solves each Newton step by the shifted tangent, never by SuperLU: the steps converge more
+    slowly, to the same equilibria (the forces where both runs land on 1 mm and 2 mm)."""
+    from softhand.fem import linear
+
+    s = IndentationSettings(mode="2d", mesh="coarse", hold_s=0.0, max_force_N=0.7,
+                            elastic_only=True, solver="cholmod", contact_points=2, tol_N=1e-7,
+                            tol_rel=0.0, threads=1)  # tightly: shifted steps converge linearly
+    plain = indent("pocket2-sil", s)
+    factorize, calls = linear._Cholmod.factorize, []
+
+    def every_other(self, vals):  # TangentSystem.factorize: a tangent, then its shifted try
+        calls.append(len(calls))
+        if len(calls) % 2:
+            raise linear._NotPositiveDefiniteError("forced by the test")
+        return factorize(self, vals)
+
+    def no_lu(self, vals):
+        raise AssertionError("the indefinite factorization was called")
+
+    monkeypatch.setattr(linear._Cholmod, "factorize", every_other)
+    monkeypatch.setattr(linear._Cholmod, "factorize_indefinite", no_lu)
+    shifted = indent("pocket2-sil", replace(s, indefinite_shift=1e-6))
+    assert len(calls) % 2 == 0 and len(calls) >= 2 * sum(r["iterations"] - 1
+                                                         for r in shifted.log) > 0
+    assert (sum(r["iterations"] for r in shifted.log)
+            >= sum(r["iterations"] for r in plain.log))
+    for depth in (1.0, 2.0):
+        assert depth in shifted.displacement_mm and depth in plain.displacement_mm
+        assert shifted.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)
+
+
+class _Springs:
+    """A stand-in for the solver's model: free residual ``r(u) = A u - b`` (linear, so the
+    secant root along an update is the exact root of ``s(a) = du . r(u + a du)``)."""
+
+    def __init__(self, A, b):
+        self.A, self.b = np.asarray(A, dtype=float), np.asarray(b, dtype=float)
+        self.free = np.arange(self.b.size)
+
+    def residual(self, u, state, dt, d, pocket):
+        return (self.A @ u - self.b,)
+
+    def search(self, du):
+        from softhand.fem.solver import _Model
+
+        u = np.zeros(self.b.size)
+        r0, r1 = self.residual(u, *_NONE)[0], self.residual(u + du, *_NONE)[0]
+        return _Model._line_search(self, u, du, r0, r1, *_NONE)
+
+
+_NONE = (None, 0.0, 0.0, None)
+
+
+def test_the_line_search_lands_on_the_secant_root_of_an_overshooting_update():
+    """r = (u0 - 1, 2e5 u1), du = (2, 1e-3): s(a) = -2 + 4.2 a and the largest residual entry
+    grows 200-fold over du, so the search lands on the root a = 10/21, where du . r = 0."""
+    m = _Springs(np.diag([1.0, 2e5]), [1.0, 0.0])
+    du = np.array([2.0, 1e-3])
+    u, res = m.search(du)
+    assert u == pytest.approx(10.0 / 21.0 * du, rel=1e-12)
+    assert du @ res[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_line_search_takes_a_tenth_at_least_and_only_after_a_large_growth():
+    """300 times the Newton update of a linear residual: the root 1/300 is below the floor 0.1,
+    which is taken. 3 times it overshoots (s(1) = 6 q > 3 q / 2) but the residual only doubles
+    (< `LINE_SEARCH_GROWTH`): kept whole. The Newton update itself does not overshoot."""
+    from softhand.fem.solver import LINE_SEARCH_GROWTH
+
+    m = _Springs([[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]], [1.0, -2.0, 0.5])
+    newton = np.linalg.solve(m.A, m.b)  # from u = 0
+    u, res = m.search(300.0 * newton)
+    assert u == pytest.approx(30.0 * newton, rel=1e-12)
+    assert res[0] == pytest.approx(m.residual(u, *_NONE)[0], rel=1e-12)
+    assert LINE_SEARCH_GROWTH > 2.0
+    assert m.search(3.0 * newton) is None
+    assert m.search(newton) is None
+
+
+def test_line_searches_keep_the_equilibria(monkeypatch):
+    """``line_searches`` changes Newton's path, not where it lands: the 2D screen of the design
+    search's trial 293 (its first winner, whose roof buckles; one search, where the pocket
+    closes) lands on 1 mm and 2 mm at the forces of full updates, within the tolerance."""
+    from softhand.design.evaluate import fe_design
+    from softhand.design.space import Candidate
+    from softhand.fem.solver import _Model
+
+    trial_293 = Candidate(outer_layer_mm=0.5554, pocket_roof_mm=1.3826, pocket_height_mm=1.7903,
+                          pocket_half_width_mm=5.7079, inner="ecoflex-00-50",
+                          outer="ecoflex-00-10")
+    design, s = fe_design(trial_293, IndentationSettings(mode="2d", hold_s=0.0,
+                                                         elastic_only=True, solver="cholmod",
+                                                         contact_points=2, threads=1))
+    plain = indent(design, s)
+    search, taken = _Model._line_search, []
+
+    def counted(self, *args):
+        out = search(self, *args)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(_Model, "_line_search", counted)
+    searched = indent(design, replace(s, line_searches=2))
+    assert sum(taken) > 0
+    for depth in (1.0, 2.0):
+        assert depth in searched.displacement_mm and depth in plain.displacement_mm
+        assert searched.force_at(depth) == pytest.approx(plain.force_at(depth), rel=1e-4)

@@ -3,7 +3,8 @@
 Runs `softhand.design.evaluate.screen_settings` (mode 3d, CHOLMOD) on pocket2-sil or on a winner
 of reports/design-search.json, in this process after a small warm-up run, and prints: the wall
 time, steps, Newton iterations and failed tries; one line per Newton try (accepted or not) with
-its iterations' factorizations (``c`` Cholesky, ``I`` not positive definite: SuperLU) and
+its iterations' factorizations (``c`` Cholesky, ``I`` not positive definite: a shifted Cholesky
+with the check's settings, SuperLU with ``--fe-newton``) and
 residuals; and, with ``--cprofile``, the functions that took the most time.
 
     python tools/fe_check_profile.py pocket2-sil --threads 1 [--cprofile]
@@ -51,9 +52,9 @@ def main() -> None:
     newton, factorize, residual = fe._Model.newton, linear.TangentSystem.factorize, \
         fe._Model.residual
 
-    def logged_factorize(self, vals):
+    def logged_factorize(self, vals, **kw):
         before = self.stats["cholesky"]
-        out = factorize(self, vals)
+        out = factorize(self, vals, **kw)
         kinds.append("c" if self.stats["cholesky"] > before else "I")
         return out
 

@@ -29,7 +29,9 @@ answers to rounding (within 1e-11 N on a whole curve), not bit for bit.
 The tangent is symmetric and almost always positive definite. One that is not (the
 factorization reports it; a few iterations of a run as a pocket's roof buckles) is solved by
 PARDISO's symmetric indefinite factorization, or without PARDISO by SuperLU in symmetric mode,
-as the NumPy reference engine solves every tangent.
+as the NumPy reference engine solves every tangent; or, where the run asks for it
+(`softhand.fem.solver.IndentationSettings.indefinite_shift`), by the Cholesky of the tangent with
+its diagonal raised (a Levenberg-Marquardt step: cheaper, and downhill in the step's energy).
 """
 
 from __future__ import annotations
@@ -41,7 +43,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["SOLVERS", "TangentSystem", "pardiso_available", "resolve_solver"]
+__all__ = ["SHIFT_TRIES", "SOLVERS", "TangentSystem", "pardiso_available", "resolve_solver"]
+
+#: Most Cholesky tries of a shifted tangent, the shift 10x larger each (`TangentSystem.factorize`)
+SHIFT_TRIES = 4
 
 #: The sparse Cholesky behind `TangentSystem`: ``"auto"`` (PARDISO where it is installed, else
 #: CHOLMOD), ``"cholmod"`` or ``"pardiso"``.
@@ -316,9 +321,11 @@ class TangentSystem:
         #: per contact set, the points the pattern holds
         self._active = [np.full(G.shape[0], bool(self._in_elements(k).all()))
                         for G, k in zip(contacts, self._pair_keys, strict=True)]
-        #: factorizations: Cholesky, PARDISO's symmetric indefinite LDL^T, SuperLU's LU; and
-        #: symbolic analyses of the pattern
-        self.stats = {"cholesky": 0, "indefinite": 0, "superlu": 0, "analyses": 0}
+        #: factorizations: Cholesky, PARDISO's symmetric indefinite LDL^T, SuperLU's LU (each
+        #: after a failed Cholesky), shifted Cholesky (`factorize`); and symbolic analyses of
+        #: the pattern
+        self.stats = {"cholesky": 0, "indefinite": 0, "superlu": 0, "shifted": 0,
+                      "analyses": 0}
         self._analyse()
 
     def _analyse(self) -> None:
@@ -348,6 +355,9 @@ class TangentSystem:
         self._rows = (ukeys % n).astype(np.int64)
         self._cols = (ukeys // n).astype(np.int64)
         self._indptr = np.searchsorted(self._cols, np.arange(n + 1))
+        if not np.array_equal(self._rows[self._indptr[:-1]], np.arange(n)):
+            raise RuntimeError("the tangent's pattern lacks a diagonal entry")  # every free
+            # dof is in an element, so its diagonal is in the elements' pattern
         self._backend.analyse(n, self._rows, self._cols, self._indptr)
         self.stats["analyses"] += 1
 
@@ -410,13 +420,34 @@ class TangentSystem:
                                 minlength=self.nnz)
         return vals
 
-    def factorize(self, vals: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    def factorize(self, vals: np.ndarray, *, shift: float | None = None
+                  ) -> Callable[[np.ndarray], np.ndarray]:
         """A function that solves K x = b for the symmetric K of lower triangle ``vals``,
-        valid until the next call."""
+        valid until the next call.
+
+        ``shift``: for a K that is not positive definite, first try the Cholesky of
+        ``K + mu I`` with ``mu = shift * mean|diag K|``, mu times 10 up to `SHIFT_TRIES` times,
+        before the indefinite factorization: the solve is then that of the shifted K (a
+        Levenberg-Marquardt step, a descent direction of the step's energy; each try costs
+        one Cholesky, against about 3 for SuperLU's LU). Counted under ``stats["shifted"]``.
+        """
         try:
             solve = self._backend.factorize(vals)
         except _NotPositiveDefiniteError:
             self.stats[self._backend.indefinite] += 1
+            if shift is not None:
+                diag = self._indptr[:-1]  # each column's first entry: its diagonal (_analyse)
+                mu = shift * float(np.abs(vals[diag]).mean())
+                for _ in range(SHIFT_TRIES):
+                    shifted = vals.copy()
+                    shifted[diag] += mu
+                    try:
+                        solve = self._backend.factorize(shifted)
+                    except _NotPositiveDefiniteError:
+                        mu *= 10.0
+                        continue
+                    self.stats["shifted"] += 1
+                    return solve
             return self._backend.factorize_indefinite(vals)
         self.stats["cholesky"] += 1
         return solve

@@ -58,6 +58,13 @@ _DEPTH_MARKS_MM = (1.0, 2.0)
 #: projected afresh at its solution, at every closed point (mm). The penalty's own overlap is
 #: about 4e-4 mm at 2 N (pocket2-sil).
 POCKET_GAP_TOL_MM = 2e-5
+#: A line search (`IndentationSettings.line_searches`) scales only an update after which the
+#: residual's largest entry is this many times larger. On the soft designs' buckling roofs the
+#: whole update of a nearly singular tangent reached 1e4 to 1e32 times the residual; where a
+#: contact point opens or closes, full updates grew it up to 40-fold and still converged
+#: quadratically, which a search there slowed (3D checks of pocket2-sil and the design search's
+#: trials 245 and 262: 3-4 more iterations).
+LINE_SEARCH_GROWTH = 100.0
 #: Most passes of the pocket's linearisation in one Newton solve.
 POCKET_PASSES = 4
 #: A ramp that accepts more than CRAWL_STEPS steps in a row under CRAWL_STEP_MM (mm) stalls at a
@@ -114,6 +121,29 @@ class IndentationSettings:
             a limit point even tiny steps meet such tangents and converge). In the soft design
             winners' 3D runs, where a pocket roof buckles, 7 of the 8 steps with two in a row
             failed only after 6-20 iterations.
+        indefinite_shift: a tangent that is not positive definite is solved by the Cholesky of
+            the tangent with this multiple of its mean absolute diagonal added to its diagonal
+            (10x more, up to `softhand.fem.linear.SHIFT_TRIES` tries, then the indefinite
+            factorization: `TangentSystem.factorize`), a Levenberg-Marquardt step, > 0; None:
+            the indefinite factorization (PARDISO's or SuperLU's, the FE's default). The
+            compiled engine only; still counted by ``max_indefinite``. It changes the path of
+            Newton's iterations, not the equilibrium they converge to (within ``tol_N``): a
+            shifted Cholesky costs about a third of SuperLU's LU, and its step goes downhill
+            in the step's energy where the LU's full step on a buckling pocket roof often
+            diverged.
+        line_searches: most line searches in one Newton solve, >= 0 (0: every update taken
+            whole, the FE's default). An update ``du`` from ``u`` overshoots where the
+            residual's component along it, ``s(a) = du . r(u + a du)``, changes sign over the
+            whole update and grows to more than half its size at the start: ``s(0) < 0 <
+            -s(0) / 2 < s(1)``, and the residual's largest entry grows `LINE_SEARCH_GROWTH`
+            times; it is then scaled by the secant root ``a = s(0) / (s(0) - s(1))``, at least
+            0.1 (one more residual evaluation). On the soft designs' buckling roofs, the whole
+            update of a nearly singular tangent reached residuals of 1e4 to 1e32 N; there the
+            root is far below 0.1, so such an update is cut to a tenth of itself. The cap
+            stops searches that cycle with a contact point opening and closing (without the
+            growth condition and unlimited, a 3D step of the design search's trial 262 took 21
+            iterations instead of 5). Like ``indefinite_shift``, it changes the path, not the
+            equilibrium.
         contact_points: Gauss points per face direction for contact (more: smoother contact).
         tol_N: Newton tolerance on the largest nodal residual, whole-phalanx newtons, plus
             ``tol_rel`` times the plate force, > 0. The default (1e-4 N + 1e-4 F) moves
@@ -170,6 +200,8 @@ class IndentationSettings:
     max_step_mm: float = 0.2
     max_newton: int = 25
     max_indefinite: int | None = None
+    indefinite_shift: float | None = None
+    line_searches: int = 0
     contact_points: int = 4
     tol_N: float = 1e-4
     tol_rel: float = 1e-4
@@ -223,6 +255,12 @@ class IndentationSettings:
                 not isinstance(self.max_indefinite, int | np.integer) or self.max_indefinite < 1):
             raise ValueError(f"max_indefinite = {self.max_indefinite!r} must be None or an "
                              "integer >= 1")
+        if self.indefinite_shift is not None and not (
+                np.isfinite(self.indefinite_shift) and self.indefinite_shift > 0):
+            raise ValueError(f"indefinite_shift = {self.indefinite_shift!r} must be None or "
+                             "finite and > 0")
+        if not isinstance(self.line_searches, int | np.integer) or self.line_searches < 0:
+            raise ValueError(f"line_searches = {self.line_searches!r} must be an integer >= 0")
         if self.force_step_N is not None and not self.force_step_N > 0:
             raise ValueError(f"force_step_N = {self.force_step_N!r} must be > 0")
         for name in self.materials:  # every constant, Prony terms too, even if elastic_only
@@ -482,6 +520,7 @@ class _Model:
         current = self.residual(u, state, dt, d, pocket)
         s = self.settings
         indefinite = 0  # tangents in a row that were not positive definite (max_indefinite)
+        searches = 0  # line searches so far (line_searches)
         for it in range(1, s.max_newton + 1):
             r, res, tangent_of, new_state, (gaps, kw_p, kw_c, _), closed = current
             history.append(res)
@@ -513,7 +552,8 @@ class _Model:
                     contacts.append((kw_c, pocket.G.data))
                 system = self.tangent_system()
                 before = system.stats["cholesky"]
-                du = system.factorize(system.values(tangent_of(raw=True), contacts))(-r)
+                du = system.factorize(system.values(tangent_of(raw=True), contacts),
+                                      shift=s.indefinite_shift)(-r)
                 indefinite = 0 if system.stats["cholesky"] > before else indefinite + 1
                 if (first_try and s.max_indefinite is not None
                         and indefinite >= s.max_indefinite):
@@ -537,9 +577,33 @@ class _Model:
                     if halvings == 5:
                         raise
                     step *= 0.5
+            if searches < s.line_searches:
+                searched = self._line_search(u, du * step, r, current[0], state, dt, d, pocket)
+                if searched is not None:
+                    searches += 1
+                    trial, current = searched
             u = trial
         raise ElementError(f"no convergence in {self.settings.max_newton} iterations "
                            f"(residual {history[-1]:.3g} N > {tol_N:.3g} N)")
+
+    def _line_search(self, u: np.ndarray, du: np.ndarray, r0: np.ndarray, r1: np.ndarray,
+                     state: ElementState, dt: float, d: float, pocket: GapSet | None):
+        """The state at the secant root of ``s(a) = du . r(u + a du)`` and its residual
+        (`residual`'s tuple) where the update ``du`` (free dofs) overshoots, with ``r0``, ``r1``
+        the free residuals at ``a = 0`` and 1 (`IndentationSettings.line_searches`); None
+        where it does not, where the residual's largest entry grew less than
+        `LINE_SEARCH_GROWTH` times, or where the root's state is inadmissible."""
+        s0, s1 = float(du @ r0), float(du @ r1)
+        if not (s0 < 0.0 < -0.5 * s0 < s1):
+            return None
+        if np.abs(r1).max() < LINE_SEARCH_GROWTH * np.abs(r0).max():
+            return None
+        trial = u.copy()
+        trial[self.free] += max(0.1, s0 / (s0 - s1)) * du
+        try:
+            return trial, self.residual(trial, state, dt, d, pocket)
+        except ElementError:
+            return None
 
     def _linearise_pocket(self, u: np.ndarray) -> GapSet | None:
         """The pocket's contact linearised at ``u`` for a Newton pass; the compiled tangent's
