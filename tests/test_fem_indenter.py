@@ -218,6 +218,8 @@ def test_a_long_part_keeps_the_phalanx_mesh_under_the_plate_and_grows_to_its_end
     assert np.linalg.det(J).min() > 0
     with pytest.raises(ValueError, match=r"length_mm = 40: a 2D section is as long as the plate"):
         build_mesh(parse_design("pocket2-sil").geometry(length_mm=40.0), spec, dim=2)
+    with pytest.raises(ValueError, match=r"length_mm = 40: .* at most 10 mm; use mode 3d"):
+        IndentationSettings(mode="2d", geometry={"length_mm": 40.0})  # before any work
 
 
 @pytest.mark.slow

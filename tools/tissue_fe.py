@@ -330,6 +330,21 @@ def _class_run(key: str, mu: float, alpha: float):
     return np.asarray(t, float), np.asarray(d, float), np.asarray(f, float), end, keep
 
 
+def _class_record(key: str, mu: float, alpha: float) -> tuple[str, str, str, dict, dict]:
+    """Class ``key``'s tissue run as the folder records it: (file name, curve text, its sha256,
+    the run's settings, its result: file, how it ended, largest force and depth)."""
+    import hashlib
+
+    from softhand.skin.contact_classes import tissue_curve_file
+
+    t, d, f, end, keep = _class_run(key, mu, alpha)
+    text = _csv(t, d, f)
+    name = tissue_curve_file(key)
+    return (name, text, hashlib.sha256(text.encode()).hexdigest(), keep,
+            {"file": name, "end": end, "max_force_N": float(f.max()),
+             "max_depth_mm": float(d.max())})
+
+
 def _csv(t: np.ndarray, d: np.ndarray, f: np.ndarray) -> str:
     """The curve file's text: the rows whose time (as written), depth and force all increase
     (a run that stops at an inversion ends in steps cut to microns: their repeats and dips are
@@ -349,7 +364,6 @@ def _csv(t: np.ndarray, d: np.ndarray, f: np.ndarray) -> str:
 def write_classes(folder: Path, alpha: float, out: Path, argv: str) -> None:
     """Fit mu, run every class, write the curves and their summary into ``folder`` (staged: a
     run that fails or is interrupted leaves the folder as it was) and the ratio report."""
-    import hashlib
     import shutil
     import tempfile
     from datetime import datetime, timezone
@@ -357,7 +371,7 @@ def write_classes(folder: Path, alpha: float, out: Path, argv: str) -> None:
     from softhand import __version__
     from softhand.fem.sweep import git_revision
     from softhand.laws.references import human_law
-    from softhand.skin.contact_classes import CLASSES, tissue_curve_file
+    from softhand.skin.contact_classes import CLASSES
 
     def say(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
@@ -371,15 +385,12 @@ def write_classes(folder: Path, alpha: float, out: Path, argv: str) -> None:
     stage.chmod(0o755)
     try:
         for key in CLASSES:
-            t, d, f, end, keep = _class_run(key, mu, alpha)
-            say(f"{key}: {end}")
-            text = _csv(t, d, f)
-            name = tissue_curve_file(key)
+            name, text, sha, keep, result = _class_record(key, mu, alpha)
+            say(f"{key}: {result['end']}")
             (stage / name).write_text(text, encoding="utf-8")
-            hashes[Path(name).stem] = hashlib.sha256(text.encode()).hexdigest()
+            hashes[Path(name).stem] = sha
             settings[key] = keep
-            results[key] = {"file": name, "end": end, "max_force_N": float(f.max()),
-                            "max_depth_mm": float(d.max())}
+            results[key] = result
         command = f"python tools/tissue_fe.py {argv}"
         summary = {
             "provenance": {
@@ -417,29 +428,25 @@ def update_class(folder: Path, key: str, out: Path, argv: str) -> None:
     """Run class ``key`` again with the mu and alpha of ``folder``'s summary and replace its
     curve, hash, settings and result there (the summary records the command), then the ratio
     report. The files are written whole or not at all (`softhand.io.atomic_write_text`)."""
-    import hashlib
     from datetime import datetime, timezone
 
     from softhand.io import atomic_write_text
-    from softhand.skin.contact_classes import tissue_curve_file
 
     where = folder / "summary.json"
     summary = json.loads(where.read_text(encoding="utf-8"))
     prov = summary["provenance"]
     mu, alpha = prov["material"]["mu_kPa"] * 1e-3, prov["material"]["alpha"]
     t0 = time.perf_counter()
-    t, d, f, end, keep = _class_run(key, mu, alpha)
-    print(f"{key}: {end} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
-    text = _csv(t, d, f)
-    name = tissue_curve_file(key)
+    name, text, sha, keep, result = _class_record(key, mu, alpha)
+    print(f"{key}: {result['end']} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr,
+          flush=True)
     prov["settings"][key] = keep
-    prov["curve_sha256"][Path(name).stem] = hashlib.sha256(text.encode()).hexdigest()
+    prov["curve_sha256"][Path(name).stem] = sha
     prov.setdefault("updates", []).append({
         "class": key, "command": f"python tools/tissue_fe.py {argv}",
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "wall_s": time.perf_counter() - t0})
-    summary["classes"][key] = {"file": name, "end": end, "max_force_N": float(f.max()),
-                               "max_depth_mm": float(d.max())}
+    summary["classes"][key] = result
     atomic_write_text(folder / name, text)
     atomic_write_text(where, json.dumps(summary, indent=1) + "\n")
     write_classes_report(folder, out)

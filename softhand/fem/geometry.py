@@ -28,7 +28,7 @@ from softhand.paper import paper
 from softhand.validate import check_number, show
 
 __all__ = ["DESIGNS", "GEOMETRY_RANGES", "PLATE_LENGTH_MM", "PLATE_WIDTH_MM", "POCKET_FIELDS", "TOPOLOGIES", "Design",
-           "PhalanxGeometry", "parse_design"]
+           "PhalanxGeometry", "check_section_length", "parse_design"]
 
 TOPOLOGIES = ("solid", "pocket1", "pocket2")
 _POCKET_HEIGHT = {"solid": 0.0, "pocket1": 1.0, "pocket2": 2.0}
@@ -64,6 +64,18 @@ GEOMETRY_RANGES: dict[str, tuple[float, float]] = {
 #: The paper's plate (mm; 20 x 10): it covers a phalanx up to this wide and this long
 PLATE_WIDTH_MM = 20.0
 PLATE_LENGTH_MM = 10.0
+
+
+def check_section_length(length_mm: float, mode: str) -> None:
+    """Refuse a part longer than the plate in 2D (mode ``"2d"``): a plane-strain section's
+    force per unit length is multiplied by the part's length, which only the plate's covers.
+
+    Raises:
+        ValueError: naming the length, the allowed bound and the way out.
+    """
+    if mode == "2d" and length_mm > PLATE_LENGTH_MM:
+        raise ValueError(f"length_mm = {length_mm:g}: a 2D section is as long as the plate, at "
+                         f"most {PLATE_LENGTH_MM:g} mm; use mode 3d")
 MIN_POCKET_MM = 0.25  # thinnest pocket: thinner is a slit that closes before the ramp starts
 _TOP_BAND_MM = 2.0  # band meshed under the roof of a solid design (or a pocket under 2 mm)
 _CURVATURE_FRACTION = 0.75  # deepest band / smallest radius of curvature (mesh-scan limit)

@@ -18,7 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from softhand.fem.elements import ReferenceElement, reference_element
-from softhand.fem.geometry import PLATE_LENGTH_MM, PLATE_WIDTH_MM, PhalanxGeometry
+from softhand.fem.geometry import (
+    PLATE_LENGTH_MM,
+    PLATE_WIDTH_MM,
+    PhalanxGeometry,
+    check_section_length,
+)
 
 __all__ = ["MESH_LEVELS", "Mesh", "MeshSpec", "build_mesh", "face_element", "full_model"]
 
@@ -217,9 +222,7 @@ def build_mesh(geom: PhalanxGeometry, spec: MeshSpec, dim: int = 3) -> Mesh:
         z = _with_midpoints(edges)
         ez = len(edges) - 1
     else:
-        if geom.length_mm > PLATE_LENGTH_MM:
-            raise ValueError(f"length_mm = {geom.length_mm:g}: a 2D section is as long as the "
-                             f"plate, at most {PLATE_LENGTH_MM:g} mm; use mode 3d")
+        check_section_length(geom.length_mm, "2d")
         z = np.zeros(1)
         ez = 1
     nz = len(z)

@@ -33,7 +33,7 @@ from softhand.fem.contact import (
     plate_gaps,
     pocket_contact,
 )
-from softhand.fem.geometry import Design, PhalanxGeometry, parse_design
+from softhand.fem.geometry import Design, PhalanxGeometry, check_section_length, parse_design
 from softhand.fem.indenter import parse_indenter
 from softhand.fem.linear import TangentSystem, resolve_solver
 from softhand.fem.materials import Material, Moduli, material
@@ -273,6 +273,9 @@ class IndentationSettings:
         if unknown:
             raise ValueError(f"geometry fields {sorted(unknown)} are unknown; allowed: "
                              f"{', '.join(PhalanxGeometry.__dataclass_fields__)}")
+        length = self.geometry.get("length_mm")  # a number: its range is checked with the design
+        if isinstance(length, int | float | np.number) and not isinstance(length, bool):
+            check_section_length(float(length), self.mode)
 
     @property
     def mesh_spec(self) -> MeshSpec:
