@@ -95,7 +95,9 @@ def screen_settings(*, mode: str = "2d", mesh: str = "default", max_force_N: flo
     and 2 N moved by at most 0.02 % (trial 293's d(2 N)), the force at 1 mm and 2 mm by less than
     1e-5 %. Trial 293 stays above the 3 s of issue 38, item 6: its ramp to 1.35 N, before the roof
     buckles, alone takes 21 steps and 87 Newton iterations (2.6 s at about 30 ms each: 14 ms
-    CHOLMOD's factorization, 12 ms the elements).
+    CHOLMOD's factorization, 12 ms the elements). reports/fe-check-trial293.md profiles it
+    and measures the other step and Newton settings: none does less work across the Pareto
+    front's soft designs, so `CHECK_NEWTON` stands.
     """
     if contact_points is None:
         contact_points = SCREEN_CONTACT_POINTS
