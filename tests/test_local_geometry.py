@@ -7,10 +7,13 @@ import mujoco
 import numpy as np
 import pytest
 
+from softhand.skin.contact_classes import border_class
 from softhand.skin.local_geometry import (
     CROSSING_TOLERANCE_DEG,
     FACE_DEG,
+    FINGER_BORDER,
     LocalGeometry,
+    LocalShape,
     contact_class,
     crossing_bin,
     geometry_accounting,
@@ -124,6 +127,29 @@ def test_a_law_fits_only_the_class_it_was_made_for():
     assert not law_fits("border/finger", "palm face", "finger", 90.0)
     assert not law_fits("border/finger", "phalanx", "finger", 90.0)
     assert not law_fits("border/finger", "palm border", "flat", None)
+    # the border's oblique laws: within the tolerance of their own angle, on either side
+    for angle in (60.0, 30.0):
+        law = f"border/finger@{angle:g}"
+        assert law_fits(law, "palm border", "finger", angle)
+        assert law_fits(law, "palm border", "finger", angle + CROSSING_TOLERANCE_DEG)
+        assert law_fits(law, "palm border", "finger", angle - CROSSING_TOLERANCE_DEG)
+        assert not law_fits(law, "palm border", "finger", angle + CROSSING_TOLERANCE_DEG + 1e-9)
+        assert not law_fits(law, "palm border", "finger", angle - CROSSING_TOLERANCE_DEG - 1e-9)
+        assert not law_fits(law, "palm face", "finger", angle)
+        assert law_classes(law) == (law, "phalanx/finger")
+    # every crossing from 15 to 90 deg has a border law, the one border_class picks
+    for crossing in np.arange(15.0, 90.01, 0.5):
+        assert law_fits(border_class(crossing), "palm border", "finger", crossing), crossing
+    # a rounded border pressing a phalanx is a finger where its radius is a finger's
+    ax = np.array([0.0, 0.0, 1.0])
+    assert contact_class(LocalShape("round", 9.0, ax), LocalShape("border", 14.0, ax))[1] \
+        == FINGER_BORDER
+    assert contact_class(LocalShape("round", 9.0, ax), LocalShape("border", 16.0, ax))[1] \
+        == "border"
+    assert law_fits("phalanx/finger", "phalanx", FINGER_BORDER, 80.0)
+    assert not law_fits("phalanx/finger", "phalanx", FINGER_BORDER, 70.0)
+    assert not law_fits("phalanx/finger", "phalanx", "border", 90.0)
+    assert not law_fits("phalanx/flat", "phalanx", FINGER_BORDER, None)
     assert not law_fits("palm/finger", "phalanx", "finger", 90.0)
     assert not law_fits("phalanx/flat", "phalanx", "finger", 90.0)
     assert not law_fits("phalanx/flat", "phalanx", "border", None)
@@ -228,7 +254,7 @@ def test_the_border_law_carries_the_fingers_on_the_palms_border():
     from softhand.envs.run import run_handshake
 
     geo = run_handshake(seed=0).force_accounting()["by_geometry"]
-    law = [c for c in geo["classes"] if c["law"] == "border/finger"]
+    law = [c for c in geo["classes"] if c["law"].startswith("border/finger")]
     carried = sum(c["share_pct"] for c in law)
     on_border = sum(c["share_pct"] for c in law if " on palm border" in c["contact"])
     assert on_border >= 0.98 * carried

@@ -1,7 +1,7 @@
 """The palm's rounded border: the laws that could carry it against an FE of it.
 
     python tools/border_law_error.py [--out reports/border-law-error] [--designs all]
-        [--handshake]
+        [--handshake] [--laws-only | --handshake-only]
 
 `reports/contact-geometry.md` finds most of the default handshake's force on a rounded border of
 the prosthetic palm's one convex surface (radius 8-23 mm, median 13.6, p10-p90), pressed by the
@@ -19,8 +19,11 @@ ramp history, with its relaxation), as the RMS and largest difference in % of 2 
 mm, and 9 mm: 11.1 mm; a flatter section leaves its flanks too tight for a 2 mm pocket's layers),
 its length moved (the paper's 10 mm phalanx, the stand-in before, and 60 mm) and the finger
 crossing the border at 30, 45, 60 and 90 deg (the handshake's fingers cross it at
-30-90 deg; below 90 deg the FE runs the whole phalanx, 4x the elements). Writes ``OUT.md`` and
-``OUT.json``.
+30-90 deg; below 90 deg the FE runs the whole phalanx, 4x the elements), set against the same
+laws and the border's law of the nearest crossing that has one (`border_class`: the laws at 60
+and 30 deg are fitted to `calibration/fe/border-finger-60/` and `-30/`, the same stand-in and
+finger). Writes ``OUT.md`` and ``OUT.json``. ``--laws-only`` sets the shipped laws against
+OUT.json's FE curves again without running them (after a refit of the laws).
 
 ``--handshake`` adds what the border's law does to the handshake: the default handshake (neutral,
 seeds 0-2) as shipped against the same with the border's pairs on the palm/finger law, as they
@@ -39,7 +42,7 @@ from softhand.bench.common import machine_info, machine_line
 from softhand.fem.geometry import DESIGNS
 from softhand.fem.solver import ConvergenceError, IndentationSettings, indent
 from softhand.io import atomic_write_json, atomic_write_text
-from softhand.skin.contact_classes import BORDER_GEOMETRY, FINGER_RADIUS_MM, INDENTERS
+from softhand.skin.contact_classes import BORDER_GEOMETRY, FINGER_RADIUS_MM, INDENTERS, border_class
 from softhand.skin.files import load_calibration
 
 BORDER = dict(BORDER_GEOMETRY)
@@ -65,11 +68,13 @@ def _fe(design: str, geometry: dict, indenter: str = FINGER) -> dict:
             "d_2N_mm": r.displacement_at(2.0)}
 
 
-def _errors(fe: dict, design: str) -> dict:
+def _errors(fe: dict, design: str, crossing: float = 90.0) -> dict:
+    """Each of `LAWS`, and the border's law of the FE finger's ``crossing`` (`border_class`),
+    against the FE ramp ``fe``."""
     cal = load_calibration(design)
     t, d, f = (np.asarray(fe[k]) for k in ("time_s", "displacement_mm", "force_N"))
     out = {}
-    for key in LAWS:
+    for key in (*LAWS, border_class(crossing)):
         law = cal.pair_laws[key].law if key in cal.pair_laws else None
         if law is None:
             out[key] = None
@@ -98,7 +103,7 @@ def _border_on_palm_law(original):
                        contact_laws=contact_laws)
         tissue = sk.series_law("rigid", str(directory))
         for name, c in out.items():
-            if c.law != "border/finger":
+            if not c.law.startswith("border/finger"):
                 continue
             _, skin = sk.skin_of_pair(name, skins)
             law = load_calibration(skin, directory, require=("soft-contact",)
@@ -111,7 +116,7 @@ def _border_on_palm_law(original):
     return choices
 
 
-HANDSHAKE_CASES = ("shipped (border/finger law)", "border pairs on the palm/finger law (before)")
+HANDSHAKE_CASES = ("shipped (the border's laws)", "border pairs on the palm/finger law (before)")
 
 
 def _handshakes() -> list[dict]:
@@ -152,11 +157,22 @@ def main() -> None:
                     help="also the handshake with the palm/finger pairs swapped (a what-if)")
     ap.add_argument("--handshake-only", action="store_true",
                     help="rerun only the what-if, keeping the FE part of OUT.json")
+    ap.add_argument("--laws-only", action="store_true",
+                    help="set the shipped laws against OUT.json's FE curves again (after the "
+                         "laws were refitted), no FE runs; with --handshake the what-if too")
     args = ap.parse_args()
     out = Path(args.out)
-    if args.handshake_only:
+    if args.handshake_only or args.laws_only:
         data = json.loads(out.with_suffix(".json").read_text(encoding="utf-8"))
-        data["handshakes"] = _handshakes()
+        if args.laws_only:
+            for r in (*data["rows"], *data["radii"]):
+                if "error" not in r["fe"]:
+                    r["errors"] = _errors(r["fe"], r.get("design", "pocket2-sil"))
+            for r in data.get("crossings", []):
+                if "error" not in r["fe"]:
+                    r["errors"] = _errors(r["fe"], "pocket2-sil", r["crossing_deg"])
+        if args.handshake_only or args.handshake:
+            data["handshakes"] = _handshakes()
         atomic_write_json(out.with_suffix(".json"), data)
         atomic_write_text(out.with_suffix(".md"), markdown(data))
         print(markdown(data))
@@ -181,12 +197,17 @@ def main() -> None:
         print("pocket2-sil", angle, "deg", flush=True)
         fe = _fe("pocket2-sil", BORDER, f"cylinder:{FINGER_RADIUS_MM:g}@{angle:g}")
         data["crossings"].append({"crossing_deg": angle, "fe": fe, "errors": None if "error" in fe
-                                  else _errors(fe, "pocket2-sil")})
+                                  else _errors(fe, "pocket2-sil", angle)})
     if args.handshake:
         data["handshakes"] = _handshakes()
     atomic_write_json(out.with_suffix(".json"), data)
     atomic_write_text(out.with_suffix(".md"), markdown(data))
     print(markdown(data))
+
+
+def _border_share(by_law: dict) -> float:
+    """The share (%) of a run's force through the border's laws, every crossing's."""
+    return sum(v for k, v in by_law.items() if k.startswith("border/finger"))
 
 
 def _cell(e: dict | None, top: str) -> str:
@@ -227,10 +248,13 @@ def markdown(d: dict) -> str:
                      f"{_cell(pf, '20')} | {at} | {_cell(e['phalanx/finger'], '2')} | "
                      f"{_cell(e['phalanx/finger'], '20')} |")
     lines += ["", "pocket2-sil with the border's radius or length moved and with the finger "
-              "crossing it at other angles than the law's 90 deg (the same laws):", "",
+              "crossing it at other angles than 90 deg (the same laws, and the border's law of "
+              "the nearest crossing angle that has one, `softhand.skin.contact_classes."
+              "border_class`: what a pair crossing the border there carries):", "",
               "| border (width x height x length mm) | top radius mm | crossing deg | FE d(2 N) mm | "
-              "border/finger law, 0-2 N | 0-20 N | palm/finger law, 0-2 N | phalanx/finger law, "
-              "0-2 N |", "|---|---|---|---|---|---|---|---|"]
+              "border/finger law (90 deg), 0-2 N | 0-20 N | the crossing's law | 0-2 N | 0-20 N | "
+              "palm/finger law, 0-2 N | phalanx/finger law, 0-2 N |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     cases = ([(r["geometry"], 90.0, r) for r in d["radii"]]
              + [(d["border"], r["crossing_deg"], r) for r in d.get("crossings", [])])
     for g, angle, r in cases:
@@ -239,22 +263,25 @@ def markdown(d: dict) -> str:
         head = (f"| {g['width_mm']:g} x {g['height_mm']:g} x {g.get('length_mm', 10.0):g} | "
                 f"{rad:.1f} | {angle:g} |")
         if "error" in fe:
-            lines.append(f"{head} FE stopped | | | | |")
+            lines.append(f"{head} FE stopped | | | | | | | |")
             continue
         e = r["errors"]
+        own = border_class(angle)
         lines.append(f"{head} {fe['d_2N_mm']:.3f} | {_cell(e.get('border/finger'), '2')} | "
-                     f"{_cell(e.get('border/finger'), '20')} | {_cell(e['palm/finger'], '2')} | "
-                     f"{_cell(e['phalanx/finger'], '2')} |")
+                     f"{_cell(e.get('border/finger'), '20')} | {own} | "
+                     f"{_cell(e.get(own), '2')} | {_cell(e.get(own), '20')} | "
+                     f"{_cell(e['palm/finger'], '2')} | {_cell(e['phalanx/finger'], '2')} |")
     if d.get("handshakes"):
         regions = ("Palm1", "Palm2", "Back1", "Back2")
         lines += ["", "What the border's law does to the handshake (`--handshake`): the default "
                   "run (neutral, pocket2-sil) as shipped and with the border's pairs on the "
                   "palm/finger law, as before the border had a law; the share of the force "
-                  "through the border/finger law and through a skin law made for the contact's "
-                  "geometry (`force_accounting.by_geometry`, crossing within 15 deg of 90):", "",
+                  "through the border's laws (every crossing's) and through a skin law made for "
+                  "the contact's geometry (`force_accounting.by_geometry`, crossing within 15 "
+                  "deg of the law's):", "",
                   "| seed | pairs | " + " | ".join(f"{r} peak N" for r in regions)
                   + " | largest other region | over 2 N | force between the hands N s | through "
-                  "the border law % | skin law fits % | deepest pair mm | bone on bone N |",
+                  "the border's laws % | skin law fits % | deepest pair mm | bone on bone N |",
                   "|---|---|" + "---|" * (len(regions) + 7)]
         for h in d["handshakes"]:
             others = {k: v for k, v in h["peak_N"].items() if k not in regions}
@@ -263,7 +290,7 @@ def markdown(d: dict) -> str:
                          + " | ".join(f"{h['peak_N'][r]:.1f}" for r in regions)
                          + f" | {top} {others[top]:.1f} | {', '.join(h['over_2N'])} | "
                          f"{h['total_Ns']:.1f} | "
-                         f"{h['by_law_share_pct'].get('border/finger', 0.0):.1f} | "
+                         f"{_border_share(h['by_law_share_pct']):.1f} | "
                          f"{h['skin_own_class_share_pct']:.1f} | "
                          f"{h['deepest_pair_mm']:.1f} | {h['bone_on_bone_peak_N']:.1f} |")
     return "\n".join(lines) + "\n"

@@ -13,7 +13,8 @@ rounded border, the crossing angle) and set against the law its pair carries. Wr
 2. the class table of the default run (neutral, seed 0): what presses the skin and where, its
    share, the law, whether it was made for it; the crossing angles summed over their bins;
 3. the radii of the rounded palm borders the fingers press (force-weighted percentiles), the
-   shape issue 36's border law needs;
+   shape issue 36's border law needs; per pair that carries a border law, the crossing at the
+   grasp its law was chosen from against the crossings it meets over the run;
 4. over the paper's population (30 sampled partners, seed 0; `softhand.envs.population`), the
    prosthetic hand and the human protocol: the share whose skin law fits and the share on a
    rounded palm border, median and 10th-90th percentiles over the partners;
@@ -69,6 +70,60 @@ def _border_radii() -> dict:
     order = np.argsort(r)
     cdf = np.cumsum(w[order]) / w.sum()
     return {str(q): float(r[order][np.searchsorted(cdf, q / 100)]) for q in (10, 50, 90)}
+
+
+def _crossing_drift() -> list[dict]:
+    """Default run: per pair that carries a border law, the crossing its class was chosen from
+    (at the grasp, `softhand.envs.skins.border_pairs`) against the crossings its contacts meet
+    over the episode (force-weighted median and 10th-90th percentiles), and the share of its
+    force within `CROSSING_TOLERANCE_DEG` of its law's angle."""
+    import mujoco
+
+    from softhand.envs.handshake import HandshakeEnv
+    from softhand.envs.skins import BORDER_REACH_M, _skin_first
+    from softhand.hands.grasp import set_grasp_state, solve_grasp
+    from softhand.skin.contact_classes import class_crossing
+
+    env = HandshakeEnv()
+    m = env.model
+    seen: dict[tuple[int, int], list[tuple[float, float]]] = {}
+    original = run_module.ContactAreas._classify
+
+    def classify(self, data, c, law, f):
+        original(self, data, c, law, f)
+        skin, other = (c.geom1, c.geom2) if self.hand[c.geom1] == 0 else (c.geom2, c.geom1)
+        a = self._local.shape(data, skin, lg.surface_point(c, skin))
+        x = lg.crossing_deg(a, self._local.shape(data, other, lg.surface_point(c, other)))
+        if a.kind == "border" and x is not None:
+            seen.setdefault((skin, other), []).append((x, f))
+
+    run_module.ContactAreas._classify = classify
+    try:
+        run_handshake(env=env, seed=0)
+    finally:
+        run_module.ContactAreas._classify = original
+    d = mujoco.MjData(m)
+    set_grasp_state(m, d, solve_grasp(env.config))
+    local, fromto = lg.LocalGeometry(m), np.zeros(6)
+    rows = []
+    for pid in range(m.npair):
+        name = m.pair(pid).name
+        law = env.pair_laws[name].law
+        g1, g2 = _skin_first(m, pid)
+        if not law.startswith("border/finger") or (g1, g2) not in seen:
+            continue
+        mujoco.mj_geomDistance(m, d, g1, g2, BORDER_REACH_M, fromto)
+        at = lg.crossing_deg(local.shape(d, g1, fromto[:3]), local.shape(d, g2, fromto[3:]))
+        x, f = np.array(seen[(g1, g2)]).T
+        order = np.argsort(x)
+        cdf = np.cumsum(f[order]) / f.sum()
+        pct = {str(q): float(x[order][min(np.searchsorted(cdf, q / 100), x.size - 1)])
+               for q in (10, 50, 90)}
+        near = np.abs(x - class_crossing(law)) <= lg.CROSSING_TOLERANCE_DEG
+        rows.append({"pair": name, "law": law, "grasp_crossing_deg": at,
+                     "run_crossing_deg": pct, "force_Ns": float(f.sum() * m.opt.timestep * env.frame_skip),
+                     "fits_pct": float(100 * f[near].sum() / f.sum())})
+    return sorted(rows, key=lambda r: -r["force_Ns"])
 
 
 def _sensitivity() -> list[dict]:
@@ -150,6 +205,7 @@ def main() -> None:
         g = _geometry(controller, hand, seed)
         data["runs"].append({"controller": controller, "hand": hand, "seed": seed, **g})
     data["border_radius_mm"] = _border_radii()
+    data["crossing_drift"] = _crossing_drift()
     print("populations", flush=True)
     data["populations"] = [_population(h) for h in ("prosthetic", "human")]
     data["sensitivity"] = _sensitivity()
@@ -167,8 +223,9 @@ def markdown(d: dict) -> str:
              "(`softhand.skin.local_geometry`: round with its radius and axis; on a mesh, a flat "
              f"face where the hull's normals within {d['window_mm']:g} mm agree within "
              f"{d['face_deg']:g} deg, a rounded border otherwise) and set against the law its "
-             "pair carries. A finger law (the FE's cylinder across the phalanx) counts within "
-             f"{d['crossing_tolerance_deg']:g} deg of 90; no law was made for a rounded border.",
+             "pair carries. A finger law (the FE's cylinder at its class's crossing angle: 90 "
+             "deg across a phalanx; 90, 60 or 30 deg across a rounded palm border) counts "
+             f"within {d['crossing_tolerance_deg']:g} deg of its angle.",
              "", machine_line(d["machine"]), "",
              "Share of the force between the hands (all recorded frames) whose law was made for "
              "the contact's geometry:", "",
@@ -190,6 +247,21 @@ def markdown(d: dict) -> str:
     lines += ["", "The rounded palm borders the partner presses in the default run, their radius "
               f"(force-weighted): 10th percentile {rad['10']:.1f} mm, median {rad['50']:.1f} mm, "
               f"90th {rad['90']:.1f} mm (from the normals' spread over the window).", ""]
+    if d.get("crossing_drift"):
+        lines += ["A pair's border law is chosen once, from its finger's crossing at the grasp "
+                  "(`softhand.envs.skins.border_pairs`: the nearest angle of "
+                  "`BORDER_CROSSINGS_DEG`); the crossings its contacts then meet over the "
+                  "default run (force-weighted) and the share of its force within "
+                  f"{d['crossing_tolerance_deg']:g} deg of its law's angle:", "",
+                  "| pair | law | crossing at the grasp, deg | over the run: median (p10-p90) "
+                  "| force N s | within its law's angle |", "|---|---|---|---|---|---|"]
+        for r in d["crossing_drift"]:
+            x, at = r["run_crossing_deg"], r["grasp_crossing_deg"]
+            lines.append(f"| {r['pair']} | {r['law']} | "
+                         f"{'-' if at is None else format(at, '.0f')} | {x['50']:.0f} "
+                         f"({x['10']:.0f}-{x['90']:.0f}) | {r['force_Ns']:.2f} | "
+                         f"{r['fits_pct']:.0f} % |")
+        lines.append("")
     if d.get("populations"):
         lines += ["Over the paper's population (30 sampled partners, seed 0), median and "
                   "10th-90th percentiles over the partners:", "",

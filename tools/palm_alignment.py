@@ -46,7 +46,7 @@ def _default_run() -> dict:
     run = run_handshake(seed=0)
     checks = run.grasp_checks()
     geo = run.force_accounting()["by_geometry"]
-    law = [c for c in geo["classes"] if c["law"] == "border/finger"]
+    law = [c for c in geo["classes"] if c["law"].startswith("border/finger")]
     carried = sum(c["share_pct"] for c in law)
     on_border = sum(c["share_pct"] for c in law if " on palm border" in c["contact"])
     return {"grip_p95_error_pct": run.grip_tracking()["p95_error_pct"],

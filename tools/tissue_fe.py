@@ -311,10 +311,10 @@ def markdown(r: dict) -> str:
 
 def _class_settings(key: str) -> dict:
     """The FE settings that make a run of class ``key``: its indenter, body and geometry."""
-    from softhand.skin.contact_classes import BORDER_GEOMETRY, FE_BODY, INDENTERS
+    from softhand.skin.contact_classes import BORDER_GEOMETRY, FE_BODY, class_indenter, class_parts
 
-    body, counterpart = key.split("/")
-    extra = {"indenter": INDENTERS[counterpart], "body": FE_BODY[body]}
+    body = class_parts(key)[0]
+    extra = {"indenter": class_indenter(key), "body": FE_BODY[body]}
     if body == "border":
         extra["geometry"] = dict(BORDER_GEOMETRY)
     return extra
@@ -433,13 +433,15 @@ def update_class(folder: Path, key: str, out: Path, argv: str) -> None:
     from softhand.io import atomic_write_text
 
     where = folder / "summary.json"
-    summary = json.loads(where.read_text(encoding="utf-8"))
-    prov = summary["provenance"]
-    mu, alpha = prov["material"]["mu_kPa"] * 1e-3, prov["material"]["alpha"]
+    material = json.loads(where.read_text(encoding="utf-8"))["provenance"]["material"]
+    mu, alpha = material["mu_kPa"] * 1e-3, material["alpha"]
     t0 = time.perf_counter()
     name, text, sha, keep, result = _class_record(key, mu, alpha)
     print(f"{key}: {result['end']} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr,
           flush=True)
+    # read again after the run: another class's run may have updated it meanwhile
+    summary = json.loads(where.read_text(encoding="utf-8"))
+    prov = summary["provenance"]
     prov["settings"][key] = keep
     prov["curve_sha256"][Path(name).stem] = sha
     prov.setdefault("updates", []).append({

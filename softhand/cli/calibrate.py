@@ -30,6 +30,7 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         FE_FOLDERS,
         PLATE_CLASS,
         TISSUE_FE_FOLDER,
+        TISSUE_OPTIONAL,
         class_curve,
     )
     from softhand.skin.files import load_calibration
@@ -57,8 +58,10 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
     except ValueError as exc:
         bad(f"--fe-dir {fe_dir!r}: {exc}")
     # the partner's side of the finger classes needs the plate and finger curves; the human
-    # tissue's own laws every class's
-    needed = CLASSES if HUMAN in names else (PLATE_CLASS, "phalanx/finger")
+    # tissue's own laws every class's but the border's oblique crossings (TISSUE_OPTIONAL: its
+    # pairs there take its border law across, class_fallback)
+    needed = ([k for k in CLASSES if k not in TISSUE_OPTIONAL] if HUMAN in names
+              else (PLATE_CLASS, "phalanx/finger"))
     lacking = [k for k in needed if k not in tissue]
     if lacking:
         bad(f"--fe-dir {fe_dir!r}: no tissue FE curve of {', '.join(lacking)} in "

@@ -28,9 +28,9 @@ from softhand.hands import partner_tissue_geoms, regions
 from softhand.hands.prosthetic import SKIN_KEYS, SURFACES, paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
-from softhand.skin.contact_classes import PLATE_CLASS, classify
+from softhand.skin.contact_classes import PLATE_CLASS, border_class, class_fallback, classify
 from softhand.skin.files import SKINS_DIR, load_calibration
-from softhand.skin.local_geometry import LocalGeometry
+from softhand.skin.local_geometry import LocalGeometry, crossing_deg
 from softhand.skin.representations import (
     REPRESENTATIONS,
     HandPad,
@@ -352,37 +352,57 @@ def _skin_first(model: mujoco.MjModel, pid: int) -> tuple[int, int]:
     return g1, g2
 
 
-def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[str, ...]:
+def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, str]:
     """The skin pairs of class ``palm/finger`` (a palm's skin and a finger) whose two geoms,
     at the state in ``data`` (the handshake's grasp: `softhand.hands.grasp.set_grasp_state`),
     are within `BORDER_REACH_M` and nearest where the palm's surface is a rounded border
     (`softhand.skin.local_geometry`: the hull's normals within 6 mm spread over 15 deg), not
-    its flat face: the pairs that take the ``border/finger`` law.
+    its flat face, each with the border class of the finger's crossing there
+    (`softhand.skin.contact_classes.border_class`: the angle between the finger's axis and the
+    border's edge): pair name -> ``border/finger`` or ``border/finger@A``.
 
     A pair's law is one for its whole episode, so where its finger lies at the grasp decides;
-    a finger that slides from the border onto the face, or the other way, keeps the law of
-    where it began (the run's geometry accounting measures the force that did).
+    a finger that slides from the border onto the face, or turns to another crossing, keeps the
+    law of where it began (the run's geometry accounting measures the force that did).
     """
     local = LocalGeometry(model)
     fromto = np.zeros(6)
-    out = []
+    out = {}
     for pid in range(model.npair):
         g1, g2 = _skin_first(model, pid)
         if classify(model, g1, g2) != "palm/finger":
             continue
         dist = mujoco.mj_geomDistance(model, data, g1, g2, BORDER_REACH_M, fromto)
-        if dist < BORDER_REACH_M and local.shape(data, g1, fromto[:3]).kind == "border":
-            out.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid))
-    return tuple(out)
+        if dist >= BORDER_REACH_M:
+            continue
+        palm = local.shape(data, g1, fromto[:3])
+        if palm.kind == "border":
+            crossing = crossing_deg(palm, local.shape(data, g2, fromto[3:]))
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
+            out[name] = border_class(crossing)
+    return out
 
 
-def _recorded_border_pairs(model: mujoco.MjModel) -> frozenset[str]:
-    """The pair names of the model's `BORDER_PAIRS_TEXT` (empty when it has none)."""
+def _border_text(borders: Mapping[str, str]) -> str:
+    """`BORDER_PAIRS_TEXT`'s data: a pair's name, with ``@A`` where its class is
+    ``border/finger@A``."""
+    return " ".join(name + key.partition("@")[1] + key.partition("@")[2]
+                    for name, key in borders.items())
+
+
+def _recorded_border_pairs(model: mujoco.MjModel) -> dict[str, str]:
+    """The model's `BORDER_PAIRS_TEXT` read back (`_border_text`): pair name -> border class
+    (``border/finger`` for a name without an angle: models written before the crossing laws);
+    empty when it has none."""
     tid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, BORDER_PAIRS_TEXT)
     if tid < 0:
-        return frozenset()
+        return {}
     adr, size = int(model.text_adr[tid]), int(model.text_size[tid])
-    return frozenset(bytes(model.text_data[adr:adr + size]).rstrip(b"\0").decode().split())
+    out = {}
+    for token in bytes(model.text_data[adr:adr + size]).rstrip(b"\0").decode().split():
+        name, at, angle = token.partition("@")
+        out[name] = f"border/finger@{angle}" if at else "border/finger"
+    return out
 
 
 @dataclass(frozen=True)
@@ -391,10 +411,11 @@ class PairChoice:
 
     Attributes:
         contact: the pair's contact class (``body/counterpart``): from its two geoms, and
-            ``border/finger`` where the grasp puts the finger on a rounded palm border
-            (`border_pairs`).
-        law: the law it carries: the class (``phalanx/finger``...; ``palm/finger`` on a border
-            where the skin has no ``border/finger`` law), ``plate`` (the paper's
+            ``border/finger`` (``border/finger@A`` at an oblique crossing) where the grasp puts
+            the finger on a rounded palm border (`border_pairs`).
+        law: the law it carries: the class (``phalanx/finger``...; where the skin has no law of
+            its class, its `softhand.skin.contact_classes.class_fallback`'s: an oblique border
+            crossing the border's law across, the border's ``palm/finger``), ``plate`` (the paper's
             protocol, by choice), ``plate (no CLASS law)`` (the skin has no law of its class),
             ``tissue`` (a ``rigid`` region: the tissue's law alone) or ``plate pad`` (a
             relaxation pad: the skin's plate law on the pad, the tissue's law in the pair).
@@ -414,8 +435,8 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
                  contact_laws: str = "geometry") -> dict[str, PairChoice]:
     """The law of every skin pair of ``model`` (pairs named by `add_skin_pairs`): the one
     place that decides which law a pair takes (the scene's spec, its force ranges and its
-    accounting all read it). A pair is of class ``border/finger`` when the model's
-    `BORDER_PAIRS_TEXT` lists it (`write_skin_laws` records `border_pairs` at the grasp)."""
+    accounting all read it). A pair is of a border class when the model's `BORDER_PAIRS_TEXT`
+    lists it (`write_skin_laws` records `border_pairs` at the grasp)."""
     check_contact_laws(contact_laws)
     reps = dict(representations or {})
     tissue = series_law("rigid", str(directory))
@@ -428,17 +449,18 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
         rep = get_representation(skin_representation(
             key, reps.get(region, DEFAULT_REPRESENTATION)))
         g1, g2 = _skin_first(model, pid)
-        contact = "border/finger" if name in borders else classify(model, g1, g2)
+        contact = borders.get(name) or classify(model, g1, g2)
         if skin == "rigid":
             out[name] = PairChoice(contact, "tissue", tissue, float(DATA_MAX_N[HUMAN]))
             continue
         cal = _calibration(skin, str(directory))
         by_class = cal.pair_laws.get(contact) if contact_laws == "geometry" else None
-        if by_class is None and contact == "border/finger" and contact_laws == "geometry":
-            # no FE curve of the border for this skin (a search's winner): the palm's own law
-            by_class, contact_law = cal.pair_laws.get("palm/finger"), "palm/finger"
-        else:
-            contact_law = contact
+        contact_law = contact
+        while by_class is None and contact_laws == "geometry" and class_fallback(contact_law):
+            # no FE curve of this class for the skin (a search's winner has no border's): the
+            # nearest class's law
+            contact_law = class_fallback(contact_law)
+            by_class = cal.pair_laws.get(contact_law)
         if by_class is not None:
             law, params, top = contact_law, by_class.pair.params, by_class.pair.calibrated_max_N
         else:
@@ -498,7 +520,7 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
         set_grasp_state(model, at, grasp)
         borders = border_pairs(model, at)
         if borders:
-            spec.add_text(name=BORDER_PAIRS_TEXT, data=" ".join(borders))
+            spec.add_text(name=BORDER_PAIRS_TEXT, data=_border_text(borders))
             model = spec.compile()
     choices = pair_choices(model, skins, reps, directory=directory, contact_laws=contact_laws)
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs

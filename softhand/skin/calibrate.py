@@ -50,10 +50,11 @@ from softhand.skin.contact_classes import (
     BORDER_GEOMETRY,
     CLASSES,
     FE_BODY,
-    INDENTERS,
     PLATE_CLASS,
     TISSUE_FE_FOLDER,
     class_curve,
+    class_indenter,
+    class_parts,
     fit_class_law,
     partner_tissue_class,
     tissue_class_data_range,
@@ -598,8 +599,8 @@ def _class_folder_curve(design: str, key: str, fe_dir: str | Path, plate: dict |
         raise ValueError(f"{path}: its folder has no summary.json: class curves must come from "
                          "`softhand fe sweep`")
     got = summary["provenance"]["settings"]
-    body = key.split("/")[0]
-    want, want_body = INDENTERS[key.split("/")[1]], FE_BODY[body]
+    body = class_parts(key)[0]
+    want, want_body = class_indenter(key), FE_BODY[body]
     if got.get("indenter", "plate") != want or got.get("body", "phalanx") != want_body:
         raise ValueError(f"{path.parent}: holds curves of indenter {got.get('indenter')!r} on "
                          f"body {got.get('body', 'phalanx')!r}; class {key} needs {want!r} on "
@@ -655,7 +656,7 @@ def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
         if not path.exists():
             continue
         got = runs.get(key, {})
-        want, body = INDENTERS[key.split("/")[1]], FE_BODY[key.split("/")[0]]
+        want, body = class_indenter(key), FE_BODY[class_parts(key)[0]]
         if got.get("indenter", "plate") != want or got.get("body", "phalanx") != body:
             raise ValueError(f"{where}: class {key} was run with indenter "
                              f"{got.get('indenter')!r} on {got.get('body')!r}; it needs "
@@ -718,7 +719,7 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
                             else DATA_MAX_N.get(design, top), tissue_top_N=TABLE_MAX_N,
                             tissue_data_N=data_range(t_key, t), reference_mass_kg=reference_mass_kg,
                             initial=initial)
-        out[key] = ClassLaw(key, skin, pair, INDENTERS[key.split("/")[1]],
+        out[key] = ClassLaw(key, skin, pair, class_indenter(key),
                             tissue_counterpart(key), {"label": curve.label,
                                                       "sha256": curve.sha256, "mesh": mesh})
     return out

@@ -32,6 +32,15 @@ the same cylinder across a rounded palm border (``border-finger/``, class ``bord
   curve within 0.1 % (`softhand.fem.geometry.PhalanxGeometry.length_mm`). A pair's body is a
   border when the handshake's grasp puts the finger on the border
   (`softhand.envs.skins.border_pairs`), not from the geoms' types.
+* **crossing**: the fingers cross the border at 30-90 deg, and a finger crossing it obliquely
+  presses stiffer (crossed cylinders: the contact lengthens, Johnson 1985, section 4.2;
+  pocket2-sil's FE depth at 2 N 2.26 mm at 90 deg, 2.00 at 30). The border's finger class comes
+  per crossing angle (`BORDER_CROSSINGS_DEG`: ``border/finger`` at 90, ``border/finger@60``
+  and ``border/finger@30``, the FE's cylinder at that angle to the stand-in's axis, the whole
+  part modelled: ``border-finger-60/``, ``border-finger-30/``), and a pair takes the class of
+  the nearest angle to its crossing at the grasp (`border_class`). A skin without a crossing's
+  curve takes the border's law across (`class_fallback`). The phalanx's finger class stays the
+  FE's 90 deg (1.7 % of the default run's force).
 A class's skin law keeps the plate law's relaxation (quasi-linear viscoelasticity: the
 relaxation function is the material's, the elastic law the shape's) and fits its own elastic law
 to the class's FE ramp (`fit_class_law`).
@@ -74,16 +83,27 @@ import numpy as np
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
-__all__ = ["BODIES", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY", "FE_FOLDERS",
-           "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS", "TISSUE_FE_FOLDER",
-           "class_curve", "classify", "fit_class_law", "geom_shape", "partner_tissue_class",
-           "shape_ratio", "tissue_class_data_range", "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
+__all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY",
+           "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS",
+           "TISSUE_FE_FOLDER", "TISSUE_OPTIONAL", "border_class", "class_crossing", "class_curve",
+           "class_fallback", "class_indenter", "class_parts", "classify", "fit_class_law", "geom_shape",
+           "partner_tissue_class", "shape_ratio", "tissue_class_data_range", "tissue_class_law",
+           "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
+#: the crossing angles (deg, the finger's axis against the border's edge) of the border's finger
+#: classes: ``border/finger`` itself (90, across), and ``border/finger@A`` for each other angle A.
+#: A handshake's fingers cross the palm's border at 30-90 deg (reports/contact-geometry.md), and
+#: the FE's border is stiffer the more oblique the finger (pocket2-sil's depth at 2 N 2.26 mm at
+#: 90 deg, 2.21 at 60, 2.00 at 30: reports/border-law-error.md); laws 30 deg apart leave every
+#: crossing from 15 to 90 deg within 15 deg of one (`border_class`)
+BORDER_CROSSINGS_DEG = (90.0, 60.0, 30.0)
 #: every class with FE curves: each body under each counterpart, but the border (a palm's rounded
-#: edge, pressed by fingers that wrap it: no flat presses a border alone)
-CLASSES = ("phalanx/flat", "phalanx/finger", "palm/flat", "palm/finger", "border/finger")
+#: edge, pressed by fingers that wrap it: no flat presses a border alone), whose finger classes
+#: come per crossing angle (`BORDER_CROSSINGS_DEG`)
+CLASSES = ("phalanx/flat", "phalanx/finger", "palm/flat", "palm/finger", "border/finger",
+           *(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:]))
 #: the paper's protocol: the class every skin has (the plate on the phalanx)
 PLATE_CLASS = "phalanx/flat"
 #: the finger counterpart's radius in the FE: the middle of the partner population's finger
@@ -95,12 +115,18 @@ FINGER_MAX_RADIUS_MM = 15.0
 INDENTERS = {"flat": "plate", "finger": f"cylinder:{FINGER_RADIUS_MM:g}@90"}
 #: each class's FE folder under the FE root ("" = the root: the paper's plate on the phalanx)
 FE_FOLDERS = {"phalanx/flat": "", "phalanx/finger": "finger", "palm/flat": "palm-plate",
-              "palm/finger": "palm-finger", "border/finger": "border-finger"}
+              "palm/finger": "palm-finger", "border/finger": "border-finger",
+              **{f"border/finger@{a:g}": f"border-finger-{a:g}" for a in BORDER_CROSSINGS_DEG[1:]}}
 #: the FE body (`softhand.fem.solver.IndentationSettings.body`) of each class's body
 FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
 #: palm's rounded border (module docstring)
 BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0, "length_mm": 40.0}
+#: the classes whose tissue FE curves the human tissue's laws may lack: the border's oblique
+#: crossings (the tissue's border FE at 90 deg took 13 minutes on its quarter; an oblique one
+#: needs the whole part, 4x the elements). The sensored human hand's pairs there take its border
+#: law across (`class_fallback`), and its geometry accounting counts them as not fitting
+TISSUE_OPTIONAL = tuple(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
 #: the folder under the FE root with the human tissue's FE curves, one file per class
 #: (`tissue_curve_file`) and a summary.json that records them (module docstring)
 TISSUE_FE_FOLDER = "tissue"
@@ -119,6 +145,57 @@ def geom_shape(model: mujoco.MjModel, geom: int) -> tuple[str, float | None]:
     return "flat", None
 
 
+def class_parts(key: str) -> tuple[str, str, float | None]:
+    """(body, counterpart, crossing deg) of class ``key`` (`CLASSES`): a finger class's crossing
+    is the angle after ``@`` (90 without one: the FE's cylinder across), a flat's None.
+
+    Raises:
+        ValueError: not a class.
+    """
+    if key not in CLASSES:
+        raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
+    kind, _, angle = key.partition("@")
+    body, counterpart = kind.split("/")
+    if counterpart != "finger":
+        return body, counterpart, None
+    return body, counterpart, float(angle) if angle else 90.0
+
+
+def class_crossing(key: str) -> float | None:
+    """The crossing angle (deg) of class ``key``'s FE finger (`class_parts`)."""
+    return class_parts(key)[2]
+
+
+def class_indenter(key: str) -> str:
+    """The FE indenter (`softhand.fem.solver.IndentationSettings.indenter`) of class ``key``:
+    the plate, or the finger's cylinder at the class's crossing angle."""
+    _, counterpart, crossing = class_parts(key)
+    if crossing is None or crossing == 90.0:
+        return INDENTERS[counterpart]
+    return f"cylinder:{FINGER_RADIUS_MM:g}@{crossing:g}"
+
+
+def border_class(crossing: float | None) -> str:
+    """The ``border/finger`` class of a finger crossing a rounded palm border at ``crossing``
+    deg: the one of the nearest angle of `BORDER_CROSSINGS_DEG` (90 where the angle is unknown;
+    the larger angle at a tie)."""
+    if crossing is None:
+        return "border/finger"
+    a = min(BORDER_CROSSINGS_DEG, key=lambda x: (abs(x - float(crossing)), -x))
+    return "border/finger" if a == 90.0 else f"border/finger@{a:g}"
+
+
+def class_fallback(key: str) -> str | None:
+    """The class whose law a pair of class ``key`` carries where its skin has no law of ``key``:
+    an oblique border crossing takes the border's law across (90 deg), the border's the palm
+    face's (``palm/finger``: what the border's pairs carried before they had a law); None for
+    the others (the plate law then, `softhand.envs.skins.pair_choices`)."""
+    body, _, crossing = class_parts(key)
+    if body != "border":
+        return None
+    return "palm/finger" if crossing == 90.0 else "border/finger"
+
+
 def _counterpart(model: mujoco.MjModel, geom: int) -> str:
     shape, r = geom_shape(model, geom)
     return "finger" if shape == "round" and r <= FINGER_MAX_RADIUS_MM else "flat"
@@ -135,7 +212,7 @@ def tissue_counterpart(key: str) -> str:
     """What presses the tissue in a pair of class ``key``: the skin's body (a phalanx presses
     like a finger, and a rounded palm border, of a finger's radius, too; a palm face like a
     flat)."""
-    return "flat" if key.split("/")[0] == "palm" else "finger"
+    return "flat" if class_parts(key)[0] == "palm" else "finger"
 
 
 def class_curve(design: str, key: str, fe_root: str | Path) -> Path:
@@ -159,8 +236,7 @@ def partner_tissue_class(key: str) -> str:
 
 def tissue_curve_file(key: str) -> str:
     """The file name of class ``key``'s curve in `TISSUE_FE_FOLDER`."""
-    if key not in CLASSES:
-        raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
+    class_parts(key)
     return f"{FE_FOLDERS[key] or 'plate'}.csv"
 
 

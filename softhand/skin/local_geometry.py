@@ -23,11 +23,14 @@ the shapes at its point (issue 36):
 `contact_class` names the class of a law's body pressed by its counterpart, with the crossing
 angle of two axes (0 deg: parallel, 90: across). `law_fits` says whether a law was made for that
 class: the law's body and counterpart must be the contact's, and a finger law (the FE's cylinder
-at 90 deg, across a phalanx or a border) counts within `CROSSING_TOLERANCE_DEG` of 90 deg, a
-named tolerance until there are FE curves per crossing angle. A rounded palm border has the
-``border/finger`` law (`softhand.skin.contact_classes`: the FE's stand-in of a 12.5 mm
-border); what presses the tissue with a border has no law of its own (the tissue's finger law
-carries it, and the accounting says so).
+at its class's crossing angle: 90 deg across a phalanx, 90, 60 or 30 deg across a border,
+`softhand.skin.contact_classes.BORDER_CROSSINGS_DEG`) counts within `CROSSING_TOLERANCE_DEG` of
+its angle (the accounting's crossing bins by their centres). A rounded palm border has the
+``border/finger`` laws (`softhand.skin.contact_classes`: the FE's stand-in of a 12.5 mm
+border). A rounded border that presses the partner's tissue is a finger-like counterpart where
+its radius is a finger class's (up to `FINGER_MAX_RADIUS_MM`, as for a round geom: the
+tissue's finger law, a 9 mm cylinder across the phalanx, was made for it), a border of its own
+beyond (no law: the accounting says so).
 
 Units: MuJoCo's (m) in, mm and deg out.
 """
@@ -39,9 +42,10 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, partner_tissue_class
+from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, class_parts, partner_tissue_class
 
-__all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "WINDOW_MM", "LocalGeometry",
+__all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "FINGER_BORDER",
+           "WINDOW_MM", "LocalGeometry",
            "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
            "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "surface_point"]
 
@@ -49,11 +53,15 @@ __all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", 
 WINDOW_MM = 6.0
 #: largest angle between those faces' normals of a flat face (deg)
 FACE_DEG = 15.0
-#: a finger law (the FE's cylinder across the phalanx, 90 deg) counts for crossings within this
-#: of 90 deg (deg)
+#: a finger law (the FE's cylinder at its class's crossing angle) counts for crossings within
+#: this of its angle (deg): half the spacing of the border's laws
 CROSSING_TOLERANCE_DEG = 15.0
 #: the crossing angle's bins in the accounting (deg)
 CROSSING_BIN_DEG = 15.0
+#: the counterpart a rounded border of a finger's radius (up to `FINGER_MAX_RADIUS_MM`) is: a
+#: finger law fits it (the prosthetic palm's border pressing the partner's phalanx is a cylinder
+#: of 8-23 mm, p10-p90, across it, as the FE's 9 mm finger)
+FINGER_BORDER = "finger-sized border"
 #: a mesh's shape is read at the centre of the point's cube of this edge in the geom's frame and
 #: kept for that cube (mm): a sixth of `WINDOW_MM`
 CELL_MM = 1.0
@@ -228,13 +236,19 @@ def _body(s: LocalShape) -> str:
 def _counterpart(s: LocalShape) -> str:
     if s.kind == "round":
         return "finger" if s.radius_mm <= FINGER_MAX_RADIUS_MM else "flat"
-    return "flat" if s.kind == "face" else "border"
+    if s.kind == "face":
+        return "flat"
+    # a rounded border presses like a finger where it is no rounder than a finger's class
+    # allows a round geom to be (its radius up to FINGER_MAX_RADIUS_MM), like a flat-ish edge
+    # otherwise
+    return FINGER_BORDER if s.radius_mm <= FINGER_MAX_RADIUS_MM else "border"
 
 
 def contact_class(body: LocalShape, counterpart: LocalShape) -> tuple[str, str, float | None]:
     """(body, counterpart, crossing) of a law's body pressed by ``counterpart``: body
-    ``phalanx``, ``palm face`` or ``palm border``; counterpart ``finger``, ``flat`` or
-    ``border``; the crossing angle (deg) where both have an axis."""
+    ``phalanx``, ``palm face`` or ``palm border``; counterpart ``finger``, ``flat``,
+    `FINGER_BORDER` (a rounded border up to `FINGER_MAX_RADIUS_MM`) or ``border`` (a rounder
+    one); the crossing angle (deg) where both have an axis."""
     return _body(body), _counterpart(counterpart), crossing_deg(body, counterpart)
 
 
@@ -267,15 +281,16 @@ def law_classes(label: str) -> tuple[str, str]:
 def law_fits(law: str, body: str, counterpart: str, crossing: float | None) -> bool:
     """Whether a law of class ``law`` (``phalanx/finger``...) was made for a contact of
     `contact_class` (body, counterpart, crossing): the same body (``palm`` is a palm face) and
-    counterpart, and a finger on a phalanx or a border within `CROSSING_TOLERANCE_DEG` of
-    90 deg."""
-    law_body, law_counterpart = law.split("/")
+    counterpart, and a finger on a phalanx or a border within `CROSSING_TOLERANCE_DEG` of the
+    law's crossing angle (`softhand.skin.contact_classes.class_parts`)."""
+    law_body, law_counterpart, law_crossing = class_parts(law)
     if body != {"phalanx": "phalanx", "palm": "palm face", "border": "palm border"}[law_body]:
         return False
-    if counterpart != law_counterpart:
+    if counterpart != law_counterpart and not (law_counterpart == "finger"
+                                               and counterpart == FINGER_BORDER):
         return False
-    if law_counterpart == "finger" and law_body != "palm" and crossing is not None:
-        return crossing >= 90.0 - CROSSING_TOLERANCE_DEG
+    if law_crossing is not None and law_body != "palm" and crossing is not None:
+        return abs(crossing - law_crossing) <= CROSSING_TOLERANCE_DEG
     return True
 
 
@@ -291,8 +306,9 @@ def _bin_text(b: int) -> str:
 
 
 def _fits(law: str, body: str, counterpart: str, b: int) -> bool:
-    # a bin fits where its lower edge does (CROSSING_TOLERANCE_DEG is a multiple of the bin)
-    return law_fits(law, body, counterpart, None if b < 0 else b * CROSSING_BIN_DEG)
+    # a bin fits where its centre does (the laws' angles are bin edges: a bin is within the
+    # tolerance of a law's angle whole, or not at all)
+    return law_fits(law, body, counterpart, None if b < 0 else (b + 0.5) * CROSSING_BIN_DEG)
 
 
 def geometry_accounting(sums: dict[tuple, float], labels: tuple[str, ...] | list[str],
