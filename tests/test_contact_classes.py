@@ -423,3 +423,24 @@ def test_class_laws_only_refuses_an_fe_folder_without_the_tissue_curves(tmp_path
     lines = [line for line in res.output.splitlines() if line.strip()]
     assert len(lines) == 1 and "tissue/" in lines[0] and str(fe) in lines[0], res.output
     assert (out / f"{skin}.json").read_bytes() == before
+
+
+def test_the_mjcf_records_each_border_pair_with_its_crossing_law():
+    """The shipped scene's MJCF lists its border pairs with the angle of their law (``@60``,
+    ``@30``; a bare name is 90 deg, as MJCF written before the crossing laws reads); each is
+    read back as that class, and an angle without a law is refused, naming the text."""
+    from softhand.envs.skins import BORDER_PAIRS_TEXT, _recorded_border_pairs
+
+    xml = Path(__file__).resolve().parents[1] / "models" / "mjcf" / "handshake_scene.xml"
+    spec = mujoco.MjSpec.from_file(str(xml))
+    text = next(t for t in spec.texts if t.name == BORDER_PAIRS_TEXT)
+    tokens = text.data.split()
+    got = _recorded_border_pairs(spec.compile())
+    assert len(got) == len(tokens)
+    for token in tokens:
+        name, _, angle = token.partition("@")
+        assert got[name] == (f"border/finger@{angle}" if angle else "border/finger")
+    assert {"border/finger", "border/finger@60", "border/finger@30"} == set(got.values())
+    text.data = tokens[0].partition("@")[0] + "@45"
+    with pytest.raises(ValueError, match=r"softhand_border_pairs: '.*@45' has no border law"):
+        _recorded_border_pairs(spec.compile())

@@ -28,7 +28,13 @@ from softhand.hands import partner_tissue_geoms, regions
 from softhand.hands.prosthetic import SKIN_KEYS, SURFACES, paper_regions
 from softhand.laws.references import DATA_MAX_N, HUMAN
 from softhand.skin.calibrate import skin_names
-from softhand.skin.contact_classes import PLATE_CLASS, border_class, class_fallback, classify
+from softhand.skin.contact_classes import (
+    CLASSES,
+    PLATE_CLASS,
+    border_class,
+    class_fallback,
+    classify,
+)
 from softhand.skin.files import SKINS_DIR, load_calibration
 from softhand.skin.local_geometry import LocalGeometry, crossing_deg
 from softhand.skin.representations import (
@@ -401,7 +407,11 @@ def _recorded_border_pairs(model: mujoco.MjModel) -> dict[str, str]:
     out = {}
     for token in bytes(model.text_data[adr:adr + size]).rstrip(b"\0").decode().split():
         name, at, angle = token.partition("@")
-        out[name] = f"border/finger@{angle}" if at else "border/finger"
+        out[name] = key = f"border/finger@{angle}" if at else "border/finger"
+        if key not in CLASSES:
+            angles = [k.partition("@")[2] for k in CLASSES if k.startswith("border/finger@")]
+            raise ValueError(f"custom text {BORDER_PAIRS_TEXT}: {token!r} has no border law; "
+                             f"allowed a pair's name alone (90 deg) or with @{', @'.join(angles)}")
     return out
 
 
