@@ -67,9 +67,16 @@ def _border_radii() -> dict:
     finally:
         run_module.ContactAreas._classify = original
     r, w = np.array(seen).T
-    order = np.argsort(r)
-    cdf = np.cumsum(w[order]) / w.sum()
-    return {str(q): float(r[order][np.searchsorted(cdf, q / 100)]) for q in (10, 50, 90)}
+    return _weighted_percentiles(r, w)
+
+
+def _weighted_percentiles(values: np.ndarray, weights: np.ndarray) -> dict[str, float]:
+    """The 10th, 50th and 90th percentiles of ``values`` weighted by ``weights`` (keys "10",
+    "50", "90")."""
+    order = np.argsort(values)
+    cdf = np.cumsum(weights[order]) / weights.sum()
+    return {str(q): float(values[order][min(np.searchsorted(cdf, q / 100), values.size - 1)])
+            for q in (10, 50, 90)}
 
 
 def _crossing_drift() -> list[dict]:
@@ -80,7 +87,7 @@ def _crossing_drift() -> list[dict]:
     import mujoco
 
     from softhand.envs.handshake import HandshakeEnv
-    from softhand.envs.skins import BORDER_REACH_M, _skin_first
+    from softhand.envs.skins import _skin_first, border_crossings
     from softhand.hands.grasp import set_grasp_state, solve_grasp
     from softhand.skin.contact_classes import class_crossing
 
@@ -104,7 +111,7 @@ def _crossing_drift() -> list[dict]:
         run_module.ContactAreas._classify = original
     d = mujoco.MjData(m)
     set_grasp_state(m, d, solve_grasp(env.config))
-    local, fromto = lg.LocalGeometry(m), np.zeros(6)
+    at_grasp = border_crossings(m, d)  # what the pairs' laws were chosen from
     rows = []
     for pid in range(m.npair):
         name = m.pair(pid).name
@@ -112,16 +119,11 @@ def _crossing_drift() -> list[dict]:
         g1, g2 = _skin_first(m, pid)
         if not law.startswith("border/finger") or (g1, g2) not in seen:
             continue
-        mujoco.mj_geomDistance(m, d, g1, g2, BORDER_REACH_M, fromto)
-        at = lg.crossing_deg(local.shape(d, g1, fromto[:3]), local.shape(d, g2, fromto[3:]))
         x, f = np.array(seen[(g1, g2)]).T
-        order = np.argsort(x)
-        cdf = np.cumsum(f[order]) / f.sum()
-        pct = {str(q): float(x[order][min(np.searchsorted(cdf, q / 100), x.size - 1)])
-               for q in (10, 50, 90)}
         near = np.abs(x - class_crossing(law)) <= lg.CROSSING_TOLERANCE_DEG
-        rows.append({"pair": name, "law": law, "grasp_crossing_deg": at,
-                     "run_crossing_deg": pct, "force_Ns": float(f.sum() * m.opt.timestep * env.frame_skip),
+        rows.append({"pair": name, "law": law, "grasp_crossing_deg": at_grasp.get(name),
+                     "run_crossing_deg": _weighted_percentiles(x, f),
+                     "force_Ns": float(f.sum() * m.opt.timestep * env.frame_skip),
                      "fits_pct": float(100 * f[near].sum() / f.sum())})
     return sorted(rows, key=lambda r: -r["force_Ns"])
 

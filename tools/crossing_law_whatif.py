@@ -28,9 +28,10 @@ import numpy as np
 from softhand.bench.common import machine_info, machine_line
 from softhand.envs import run as run_module
 from softhand.envs.handshake import HandshakeEnv
-from softhand.envs.skins import SKINS_DIR, _calibration, _skin_first
+from softhand.envs.skins import _skin_first, skin_of_pair
 from softhand.io import atomic_write_json, atomic_write_text
 from softhand.skin.contact_classes import BORDER_CROSSINGS_DEG, border_class, class_crossing
+from softhand.skin.files import load_calibration
 from softhand.skin.local_geometry import (
     CROSSING_TOLERANCE_DEG,
     LocalGeometry,
@@ -45,13 +46,14 @@ REGIONS = ("Palm1", "Palm2", "Back1", "Back2")
 def episode(seed: int, follow: bool, hysteresis: float) -> dict:
     env = HandshakeEnv()
     m = env.model
-    cal = _calibration("pocket2-sil", str(SKINS_DIR))
     d0 = mujoco.MjData(m)
     mujoco.mj_forward(m, d0)
     border = {}  # pid -> [skin geom, other geom, {class: (solref, solimp)}, current class]
     for pid in range(m.npair):
-        c = env.pair_laws[m.pair(pid).name]
+        name = m.pair(pid).name
+        c = env.pair_laws[name]
         if c.law.startswith("border/finger"):
+            cal = load_calibration(skin_of_pair(name, env.skins)[1])
             g1, g2 = _skin_first(m, pid)
             vals = {border_class(a): pair_law_values(m, pid, cal.pair_laws[border_class(a)]
                                                      .pair.params, issues=[], data=d0)
@@ -121,6 +123,8 @@ def main() -> None:
     ap.add_argument("--hysteresis", type=float, default=3.0)
     ap.add_argument("--out", default="reports/crossing-law-whatif")
     a = ap.parse_args()
+    if any(s < 0 for s in a.seeds):
+        raise SystemExit(f"--seeds {' '.join(map(str, a.seeds))}: each must be 0 or more")
     if not 0.0 <= a.hysteresis <= 15.0:
         raise SystemExit(f"--hysteresis {a.hysteresis}: allowed 0-15 deg")
     out = Path(a.out)

@@ -60,6 +60,7 @@ __all__ = [
     "CalibratedRangeWarning",
     "PairChoice",
     "add_skin_pairs",
+    "border_crossings",
     "border_pairs",
     "calibrated_max_force",
     "check_contact_laws",
@@ -358,19 +359,13 @@ def _skin_first(model: mujoco.MjModel, pid: int) -> tuple[int, int]:
     return g1, g2
 
 
-def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, str]:
+def border_crossings(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, float | None]:
     """The skin pairs of class ``palm/finger`` (a palm's skin and a finger) whose two geoms,
     at the state in ``data`` (the handshake's grasp: `softhand.hands.grasp.set_grasp_state`),
     are within `BORDER_REACH_M` and nearest where the palm's surface is a rounded border
     (`softhand.skin.local_geometry`: the hull's normals within 6 mm spread over 15 deg), not
-    its flat face, each with the border class of the finger's crossing there
-    (`softhand.skin.contact_classes.border_class`: the angle between the finger's axis and the
-    border's edge): pair name -> ``border/finger`` or ``border/finger@A``.
-
-    A pair's law is one for its whole episode, so where its finger lies at the grasp decides;
-    a finger that slides from the border onto the face, or turns to another crossing, keeps the
-    law of where it began (the run's geometry accounting measures the force that did).
-    """
+    its flat face, each with the finger's crossing there (deg, the angle between the finger's
+    axis and the border's edge; None where either has no axis)."""
     local = LocalGeometry(model)
     fromto = np.zeros(6)
     out = {}
@@ -383,17 +378,27 @@ def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, str]:
             continue
         palm = local.shape(data, g1, fromto[:3])
         if palm.kind == "border":
-            crossing = crossing_deg(palm, local.shape(data, g2, fromto[3:]))
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
-            out[name] = border_class(crossing)
+            out[name] = crossing_deg(palm, local.shape(data, g2, fromto[3:]))
     return out
+
+
+def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, str]:
+    """The pairs of `border_crossings` at the state in ``data``, each with the border class of
+    its finger's crossing (`softhand.skin.contact_classes.border_class`): pair name ->
+    ``border/finger`` or ``border/finger@A``.
+
+    A pair's law is one for its whole episode, so where its finger lies at the grasp decides;
+    a finger that slides from the border onto the face, or turns to another crossing, keeps the
+    law of where it began (the run's geometry accounting measures the force that did).
+    """
+    return {name: border_class(x) for name, x in border_crossings(model, data).items()}
 
 
 def _border_text(borders: Mapping[str, str]) -> str:
     """`BORDER_PAIRS_TEXT`'s data: a pair's name, with ``@A`` where its class is
     ``border/finger@A``."""
-    return " ".join(name + key.partition("@")[1] + key.partition("@")[2]
-                    for name, key in borders.items())
+    return " ".join(name + key.removeprefix("border/finger") for name, key in borders.items())
 
 
 def _recorded_border_pairs(model: mujoco.MjModel) -> dict[str, str]:
