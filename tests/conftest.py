@@ -1,21 +1,54 @@
 """Test session setup: softhand's caches (solved grasps, softhand.paths.cache_dir) go to a folder of
-this session, shared by its subprocesses and removed at its end, so that a run neither reads nor
-fills the user's cache."""
+this session, shared by its subprocesses and its pytest-xdist workers and removed at its end, so
+that a run neither reads nor fills the user's cache, and a grasp one worker solved is read back by
+the other.
+
+The suite runs on pytest-xdist's workers (pyproject.toml's addopts: one per core), each test
+file on one worker (``--dist loadfile``: its module fixtures built once); the tests that build the
+checkout into a virtual environment hold `checkout_build_lock` while pip builds it (pip writes
+the checkout's own build folders)."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import tempfile
+from contextlib import contextmanager
+from pathlib import Path
 
 from softhand.paths import CACHE_ENV
 
-_CACHE = tempfile.mkdtemp(prefix="softhand-test-cache-")
+#: the environment variable through which the session's cache folder reaches its workers
+_SESSION_ENV = "SOFTHAND_TEST_SESSION_CACHE"
+_OWNER = _SESSION_ENV not in os.environ  # the controller (or a run without workers)
+if _OWNER:
+    os.environ[_SESSION_ENV] = tempfile.mkdtemp(prefix="softhand-test-cache-")
+_CACHE = os.environ[_SESSION_ENV]
 os.environ[CACHE_ENV] = _CACHE
 
 
+@contextmanager
+def checkout_build_lock():
+    """Held while pip builds the checkout (``pip wheel``, ``pip install -e``): pip writes its
+    build folders and ``softhand.egg-info`` into the checkout, so two workers building at once
+    would write over each other. A file lock in the session's cache folder (POSIX ``flock``;
+    without fcntl, none: the suite then runs its build tests as it finds them)."""
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        yield
+        return
+    with open(Path(_CACHE) / "checkout-build.lock", "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def pytest_sessionfinish(session, exitstatus):
-    shutil.rmtree(_CACHE, ignore_errors=True)
+    if _OWNER:
+        shutil.rmtree(_CACHE, ignore_errors=True)
 
 
 def sigint_default() -> None:

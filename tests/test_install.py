@@ -25,6 +25,7 @@ import venv
 from pathlib import Path
 
 import pytest
+from conftest import checkout_build_lock
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -68,7 +69,9 @@ def _parent_paths(cwd: Path, own: list[str]) -> list[str]:
 @pytest.mark.slow
 def test_wheel_install_runs_the_handshake_from_another_folder(tmp_path):
     wheels = tmp_path / "wheels"
-    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(wheels), str(REPO)])
+    with checkout_build_lock():
+        _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(wheels),
+              str(REPO)])
     (wheel,) = wheels.glob("softhand-*.whl")
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(system_site_packages=False, with_pip=True).create(env_dir)

@@ -16,6 +16,7 @@ from importlib import metadata
 from pathlib import Path
 
 import pytest
+from conftest import checkout_build_lock
 
 from softhand.requirements import CHECKED, RequirementError, check, minimums
 
@@ -61,8 +62,9 @@ def test_the_declared_minimums_install_and_run_the_main_job(tmp_path):
     venv.create(env_dir, with_pip=True)
     python = env_dir / "bin" / "python"
     pins = [f"{name}=={version}" for name, version in minimums().items()]
-    install = subprocess.run([str(python), "-m", "pip", "install", "-q", "-e", str(ROOT), *pins],
-                             capture_output=True, text=True, timeout=900)
+    with checkout_build_lock():
+        install = subprocess.run([str(python), "-m", "pip", "install", "-q", "-e", str(ROOT),
+                                  *pins], capture_output=True, text=True, timeout=900)
     if install.returncode != 0 and "ResolutionImpossible" not in install.stderr and any(
             s in install.stderr for s in ("Could not find a version", "Connection", "Network")):
         pytest.skip(f"the package registry could not be reached: {install.stderr[-300:]}")

@@ -229,8 +229,8 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
     batch_size = 8 if cluster is not None else (1 if workers == 1 else 4 * workers)
     failed: dict[int, str] = {}
     ran, interrupted = 0, False
-    while before + ran < trials and not interrupted:
-        try:
+    try:  # the loop's test too: a Ctrl-C right after a trial's progress lands there
+        while before + ran < trials and not interrupted:
             n = min(batch_size, trials - before - ran)
             asked = dict(_ask(study, space) for _ in range(n))
             by_number = {t.number: (t, c) for t, c in asked.items()}
@@ -261,8 +261,8 @@ def run_search(space: DesignSpace, *, trials: int, out: str | Path, seed: int | 
                 if progress:
                     progress(before + ran, trials)
             interrupted = outcome.interrupted
-        except KeyboardInterrupt:  # between two FE runs (asking, telling): stop here too;
-            interrupted = True     # a trial asked and not told is closed on --resume
+    except KeyboardInterrupt:  # between two FE runs (asking, telling): stop here too;
+        interrupted = True     # a trial asked and not told is closed on --resume
     return SearchOutcome(study=study, done_before=before, ran=ran, failed=failed,
                          interrupted=interrupted, wall_s=time.perf_counter() - t0)
 
