@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import mujoco
@@ -101,7 +102,51 @@ def test_a_tissue_class_law_is_the_plate_law_times_the_tissue_fe_ratio():
         tissue_class_law(tissue, "palm/finger")
     assert [partner_tissue_class(k) for k in CLASSES] == [
         "phalanx/finger", "phalanx/finger", "phalanx/flat", "phalanx/flat", "phalanx/finger",
-        "phalanx/finger", "phalanx/finger"]
+        "phalanx/finger@60", "phalanx/finger@30"]
+
+
+def test_a_tissue_crossing_law_is_the_finger_law_times_the_long_phalanx_s_crossing_ratio():
+    """The partner's phalanx crossed obliquely by a border: the tissue's 90 deg finger law
+    times the long phalanx's force at the angle over across at the same depth (to the spline
+    fit, 2 % of 2 N); its data end no deeper than the long phalanx's ramps; the curves come
+    from a folder's by `tissue_class_curves`, and a folder without the long phalanx's gives
+    none (the skins' oblique classes are then left out)."""
+    from softhand.skin.contact_classes import (
+        TISSUE_CROSSING_REFERENCE,
+        tissue_class_curves,
+    )
+
+    tissue = reference_law(HUMAN)
+    d = np.linspace(0.0, 6.0, 200)
+
+    def curve(k, label, n=200):
+        return Curve(d[:n] / 0.5, d[:n], k(d[:n]) * d[:n] ** 2, np.zeros(n, bool), label=label)
+
+    plate = curve(lambda x: 0.2, "plate")
+    finger = curve(lambda x: 0.1 + 0.01 * x, "finger")
+    across = curve(lambda x: 0.3, "long across")
+    oblique = curve(lambda x: 0.3 * (1.5 - 0.05 * x), "long at 30")
+    law = tissue_class_law(tissue, "phalanx/finger@30", plate, finger, (across, oblique))
+    x = np.linspace(0.5, 5.5, 30)
+    want = tissue.elastic.force(x) * (0.5 + 0.05 * x) * (1.5 - 0.05 * x)
+    assert np.abs(law.elastic.force(x) - want).max() < 0.02 * 2.0
+    assert law.prony == tissue.prony and "long phalanx" in law.source["shape_factor"]
+    with pytest.raises(ValueError, match="plate and phalanx/finger@30 curves"):
+        tissue_class_law(tissue, "phalanx/finger@30", plate, finger)
+    with pytest.raises(ValueError, match="class = 'phalanx/finger@90'"):
+        tissue_class_law(tissue, TISSUE_CROSSING_REFERENCE, plate, finger)
+    short = curve(lambda x: 0.45, "long at 30, short", n=100)  # to 3.0 mm
+    law = tissue_class_law(tissue, "phalanx/finger@30", plate, finger, (across, short))
+    assert tissue_class_data_range(tissue, "phalanx/finger@30", law, plate, finger,
+                                   cross=(across, short)) == pytest.approx(
+        float(law.elastic.force(short.displacement_mm[-1])))
+    curves = {"phalanx/flat": plate, "phalanx/finger": finger,
+              TISSUE_CROSSING_REFERENCE: across, "phalanx/finger@30": oblique}
+    assert tissue_class_curves("phalanx/finger@30", curves) == (plate, finger, (across, oblique))
+    assert tissue_class_curves("phalanx/finger", curves) == (plate, finger, None)
+    assert tissue_class_curves("phalanx/finger@60", curves) is None
+    del curves[TISSUE_CROSSING_REFERENCE]
+    assert tissue_class_curves("phalanx/finger@30", curves) is None
 
 
 def test_a_tissue_class_law_is_calibrated_to_where_the_tissue_s_data_end():
@@ -109,7 +154,8 @@ def test_a_tissue_class_law_is_calibrated_to_where_the_tissue_s_data_end():
     is calibrated to 0.6 x 7 N, not 7 N; no deeper than both FE ramps reach; the plate class to
     the data's own force. The shipped pair laws carry these ranges: where a prosthetic phalanx
     or border presses the partner (the tissue's finger class, 0.69 x 7 = 4.8 N), where a palm
-    face does (its plate class, 7 N)."""
+    face does (its plate class, 7 N), where a border crosses the partner's phalanx obliquely
+    (its crossing class, stiffer: further)."""
     from softhand.skin.files import load_calibration
 
     tissue = reference_law(HUMAN)
@@ -130,6 +176,8 @@ def test_a_tissue_class_law_is_calibrated_to_where_the_tissue_s_data_end():
     assert tops["palm/flat"] == tops["palm/finger"] == pytest.approx(7.0)  # tissue: a flat's
     for key in ("phalanx/flat", "phalanx/finger", "border/finger"):  # tissue: a finger's
         assert tops[key] == pytest.approx(4.8, abs=0.1), key
+    # an oblique border crosses the partner's phalanx: its tissue crossing's, further
+    assert tops["border/finger@30"] > tops["border/finger@60"] > tops["border/finger"] + 0.5
 
 
 @pytest.fixture(scope="module")
@@ -350,10 +398,15 @@ def test_the_shipped_tissue_curves_are_the_tissue_fe_of_every_class(tmp_path):
 
     from softhand.paths import FE_DIR
     from softhand.skin.calibrate import tissue_curves
-    from softhand.skin.contact_classes import PLATE_CLASS, TISSUE_FE_FOLDER, TISSUE_OPTIONAL
+    from softhand.skin.contact_classes import (
+        PLATE_CLASS,
+        TISSUE_CLASSES,
+        TISSUE_FE_FOLDER,
+        TISSUE_OPTIONAL,
+    )
 
     curves = tissue_curves(FE_DIR)
-    assert set(CLASSES) - set(TISSUE_OPTIONAL) <= set(curves) <= set(CLASSES)
+    assert set(TISSUE_CLASSES) - set(TISSUE_OPTIONAL) <= set(curves) <= set(TISSUE_CLASSES)
     plate = curves[PLATE_CLASS]
     law = reference_law(HUMAN)
     i = plate.peak_index
@@ -364,10 +417,24 @@ def test_the_shipped_tissue_curves_are_the_tissue_fe_of_every_class(tmp_path):
     ratio = shape_ratio(plate, curves["phalanx/finger"])
     r = ratio(np.linspace(0.5, 6.0, 12))
     assert np.all(r < 1.0) and np.all(r > 0.3), r
+    # the long phalanx: an oblique finger presses it harder than one across, the more oblique
+    # the harder (crossed cylinders: the contact lengthens)
+    across = curves["phalanx/finger@90"]
+    x = np.linspace(1.0, 6.0, 11)
+    r60 = shape_ratio(across, curves["phalanx/finger@60"])(x)
+    r30 = shape_ratio(across, curves["phalanx/finger@30"])(x)
+    assert np.all(r60 > 1.0) and np.all(r30 > r60), (r60, r30)
     shutil.copytree(FE_DIR / TISSUE_FE_FOLDER, tmp_path / TISSUE_FE_FOLDER)
     path = tmp_path / TISSUE_FE_FOLDER / "finger.csv"
     path.write_text(path.read_text(encoding="utf-8") + "99,9,99,0\n", encoding="utf-8")
     with pytest.raises(ValueError, match=r"finger\.csv: its sha256"):
+        tissue_curves(tmp_path)
+    shutil.copy(FE_DIR / TISSUE_FE_FOLDER / "finger.csv", path)
+    where = tmp_path / TISSUE_FE_FOLDER / "summary.json"
+    summary = json.loads(where.read_text(encoding="utf-8"))
+    summary["provenance"]["settings"]["phalanx/finger@30"]["geometry"] = {}
+    where.write_text(json.dumps(summary), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"phalanx/finger@30 was run on a phalanx None mm long"):
         tissue_curves(tmp_path)
 
 
@@ -386,7 +453,7 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
 
     cal = load_calibration(HUMAN)
     curves = tissue_curves(FE_DIR)
-    assert set(cal.pair_laws) == set(curves)  # every class the tissue's FE has
+    assert set(cal.pair_laws) == set(curves) & set(CLASSES)  # every class the tissue's FE has
     assert set(CLASSES) - set(TISSUE_OPTIONAL) <= set(curves)
     tissue = reference_law(HUMAN)
     d = np.linspace(0.25, 6.0, 24)

@@ -136,7 +136,11 @@ def test_a_law_fits_only_the_class_it_was_made_for():
         assert not law_fits(law, "palm border", "finger", angle + CROSSING_TOLERANCE_DEG + 1e-9)
         assert not law_fits(law, "palm border", "finger", angle - CROSSING_TOLERANCE_DEG - 1e-9)
         assert not law_fits(law, "palm face", "finger", angle)
-        assert law_classes(law) == (law, "phalanx/finger")
+        # the partner's phalanx under it is crossed at the same angle: the tissue's crossing
+        tissue = f"phalanx/finger@{angle:g}"
+        assert law_classes(law) == (law, tissue)
+        assert law_fits(tissue, "phalanx", "finger", angle)
+        assert not law_fits(tissue, "phalanx", "finger", 90.0)
     # every crossing from 15 to 90 deg has a border law, the one border_class picks
     for crossing in np.arange(15.0, 90.01, 0.5):
         assert law_fits(border_class(crossing), "palm border", "finger", crossing), crossing

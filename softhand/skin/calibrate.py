@@ -51,12 +51,18 @@ from softhand.skin.contact_classes import (
     CLASSES,
     FE_BODY,
     PLATE_CLASS,
+    TISSUE_CLASSES,
+    TISSUE_CROSSING_MESH,
+    TISSUE_CROSSING_REFERENCE,
+    TISSUE_CROSSINGS,
     TISSUE_FE_FOLDER,
+    TISSUE_LONG_PHALANX,
     class_curve,
     class_indenter,
     class_parts,
     fit_class_law,
     partner_tissue_class,
+    tissue_class_curves,
     tissue_class_data_range,
     tissue_class_law,
     tissue_counterpart,
@@ -630,9 +636,11 @@ def _mesh_name(settings: dict) -> str:
 
 
 def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
-    """The human tissue's FE curves per contact class in ``fe_dir``'s `TISSUE_FE_FOLDER`
-    (written by ``python tools/tissue_fe.py --classes``), each checked against the sha256 and
-    the indenter and body its summary.json records; {} where the folder is not there.
+    """The human tissue's FE curves per contact class (`TISSUE_CLASSES`: the crossings' runs
+    on the long phalanx too) in ``fe_dir``'s `TISSUE_FE_FOLDER` (written by ``python
+    tools/tissue_fe.py --classes``), each checked against the sha256 and the indenter and body
+    (and for the crossings the phalanx's length) its summary.json records; {} where the folder
+    is not there.
 
     Raises:
         ValueError: a folder without its summary, a curve it does not record or that differs
@@ -651,7 +659,7 @@ def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
         raise ValueError(f"{where}: not a tissue FE summary ({exc}); write the folder with "
                          "`python tools/tissue_fe.py --classes`") from None
     out = {}
-    for key in CLASSES:
+    for key in TISSUE_CLASSES:
         path = folder / tissue_curve_file(key)
         if not path.exists():
             continue
@@ -661,6 +669,16 @@ def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
             raise ValueError(f"{where}: class {key} was run with indenter "
                              f"{got.get('indenter')!r} on {got.get('body')!r}; it needs "
                              f"{want!r} on {body!r}")
+        length = (got.get("geometry") or {}).get("length_mm")
+        if key in (TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS) and (
+                length != TISSUE_LONG_PHALANX["length_mm"]):
+            raise ValueError(f"{where}: class {key} was run on a phalanx {length} mm long; it "
+                             f"needs the long phalanx, {TISSUE_LONG_PHALANX['length_mm']:g} mm")
+        if key in (TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS) and (
+                got.get("mesh") != TISSUE_CROSSING_MESH):
+            raise ValueError(f"{where}: class {key} was run on the {got.get('mesh')!r} mesh; the "
+                             f"crossings and their reference need one mesh, "
+                             f"{TISSUE_CROSSING_MESH!r}")
         out[key] = _recorded_curve(path, f"tissue {key}@0.5mm/s", summary)
     return out
 
@@ -687,16 +705,18 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
     tplate = tcurves.get(PLATE_CLASS)
 
     def tissue_law(key: str) -> SkinLaw | None:
-        if key != PLATE_CLASS and (tplate is None or key not in tcurves):
-            return None
-        return tissue_class_law(tissue, key, tplate, tcurves.get(key))
+        if key == PLATE_CLASS:
+            return tissue
+        found = tissue_class_curves(key, tcurves)
+        return None if found is None else tissue_class_law(tissue, key, *found)
 
     human = design == HUMAN
     plate = None if human else read_summary(root)
     out: dict[str, ClassLaw] = {}
 
     def data_range(key: str, law: SkinLaw) -> float:  # the tissue class law's data range
-        return tissue_class_data_range(tissue, key, law, tplate, tcurves.get(key))
+        plate, other, cross = tissue_class_curves(key, tcurves) or (tplate, None, None)
+        return tissue_class_data_range(tissue, key, law, plate, other, cross=cross)
 
     for key in CLASSES:
         t_key = partner_tissue_class(key)

@@ -59,12 +59,21 @@ curved indenters on the middle phalanx, or of the palm's border, were found; the
 FE's prediction, and the layer's constants are assumptions (`TISSUE_FE_FOLDER`'s summary
 records them). The tissue's data (a flat plate to 7 N) end at a depth, 6.24 mm; a class's law
 rests on them to that depth, not to that force (`tissue_class_data_range`): the finger class
-(0.69 x the plate's force) is calibrated to 4.8 N, the border class to 9.5 N, and the palm
-slab's (its FE stops at 2.07 mm) to 3.9 N.
+(0.69 x the plate's force) is calibrated to 4.8 N, its crossings to 5.6 N (60 deg) and 8.7 N
+(30 deg), the border class to 9.5 N, and the palm slab's (its FE stops at 2.07 mm) to 3.9 N.
 
 * the partner's tissue side of a pair is pressed by the skin's body: a prosthetic phalanx (or
   a rounded border, of a finger's radius) like a finger, a palm face like a flat
   (`tissue_counterpart`): its law is the tissue's ``phalanx/finger`` or plate law;
+* where the skin's rounded border crosses the partner's finger obliquely (``border/finger@A``),
+  the partner's phalanx is crossed at the same angle, and its side takes the tissue's
+  ``phalanx/finger@A`` (`TISSUE_CROSSINGS`, tissue-only classes: `partner_tissue_class`). The
+  paper's 10 mm specimen cannot hold an oblique cylinder (it runs off the ends), so the
+  crossing comes from a long phalanx (`TISSUE_LONG_PHALANX`, 40 mm as the border stand-in):
+  the law is the 90 deg finger law (the specimen's) times the long phalanx's force at the angle
+  over its force across (`TISSUE_CROSSING_REFERENCE`), at the same depth
+  (`tissue_class_law`). A tissue FE folder without those curves leaves the skins' oblique
+  classes out (their pairs take the border's law across, `class_fallback`);
 * the sensored human hand (the paper's protocol, `softhand handshake --hand human`) takes the
   tissue's law of each contact's own class, its pair law against the partner's tissue side as
   above.
@@ -85,10 +94,12 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
 __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY",
            "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS",
-           "TISSUE_FE_FOLDER", "TISSUE_OPTIONAL", "border_class", "class_crossing", "class_curve",
+           "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCE",
+           "TISSUE_FE_FOLDER",
+           "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing", "class_curve",
            "class_fallback", "class_indenter", "class_parts", "classify", "fit_class_law", "geom_shape",
-           "partner_tissue_class", "shape_ratio", "tissue_class_data_range", "tissue_class_law",
-           "tissue_counterpart", "tissue_curve_file"]
+           "partner_tissue_class", "shape_ratio", "tissue_class_curves", "tissue_class_data_range",
+           "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
@@ -116,7 +127,9 @@ INDENTERS = {"flat": "plate", "finger": f"cylinder:{FINGER_RADIUS_MM:g}@90"}
 #: each class's FE folder under the FE root ("" = the root: the paper's plate on the phalanx)
 FE_FOLDERS = {"phalanx/flat": "", "phalanx/finger": "finger", "palm/flat": "palm-plate",
               "palm/finger": "palm-finger", "border/finger": "border-finger",
-              **{f"border/finger@{a:g}": f"border-finger-{a:g}" for a in BORDER_CROSSINGS_DEG[1:]}}
+              **{f"border/finger@{a:g}": f"border-finger-{a:g}" for a in BORDER_CROSSINGS_DEG[1:]},
+              # the tissue's crossing runs (its folder's file names; no skin folder)
+              **{f"phalanx/finger@{a:g}": f"finger-{a:g}" for a in BORDER_CROSSINGS_DEG}}
 #: the FE body (`softhand.fem.solver.IndentationSettings.body`) of each class's body
 FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
@@ -127,6 +140,25 @@ BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0, "length_mm": 40.0}
 #: needs the whole part, 4x the elements). The sensored human hand's pairs there take its border
 #: law across (`class_fallback`), and its geometry accounting counts them as not fitting
 TISSUE_OPTIONAL = tuple(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
+#: the tissue-only classes of the partner's phalanx crossed by a skin's rounded border at an
+#: oblique angle (the partner's side of ``border/finger@A``, `partner_tissue_class`): no skin
+#: has them (a skin's phalanx under an oblique finger keeps ``phalanx/finger``)
+TISSUE_CROSSINGS = tuple(f"phalanx/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
+#: the tissue FE run the crossings are measured against: the same long phalanx, the finger
+#: across it (90 deg); not a law of its own (the 90 deg law is the specimen's, ``phalanx/finger``)
+TISSUE_CROSSING_REFERENCE = "phalanx/finger@90"
+#: every class the tissue FE folder may hold a curve of
+TISSUE_CLASSES = (*CLASSES, TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS)
+#: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) of the tissue's
+#: crossing runs: the paper's section, as long as the border stand-in, so that an oblique finger
+#: stays on it (the paper's 10 mm specimen has free ends within the finger's contact)
+TISSUE_LONG_PHALANX = {"length_mm": BORDER_GEOMETRY["length_mm"]}
+#: the mesh level of the tissue's crossing runs (`softhand.fem.solver.IndentationSettings.mesh`):
+#: an oblique finger needs the whole long part (no symmetry), which on the default mesh takes
+#: hours of the soft tissue's small steps; the coarse mesh, the same for the reference across
+#: and each angle, so that their ratio is one mesh's (the plate's depth at 7 N moves 2.5 % from
+#: the default to the coarse mesh, reports/tissue-fe.md)
+TISSUE_CROSSING_MESH = "coarse"
 #: the folder under the FE root with the human tissue's FE curves, one file per class
 #: (`tissue_curve_file`) and a summary.json that records them (module docstring)
 TISSUE_FE_FOLDER = "tissue"
@@ -152,7 +184,7 @@ def class_parts(key: str) -> tuple[str, str, float | None]:
     Raises:
         ValueError: not a class.
     """
-    if key not in CLASSES:
+    if key not in TISSUE_CLASSES:
         raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
     kind, _, angle = key.partition("@")
     body, counterpart = kind.split("/")
@@ -230,8 +262,32 @@ def fit_class_law(design: str, key: str, plate_law: SkinLaw, curve: Curve) -> Sk
 def partner_tissue_class(key: str) -> str:
     """The tissue class law the partner's side of a pair of class ``key`` takes: the tissue
     pressed like a finger (``phalanx/finger``) or like a flat (`PLATE_CLASS`) by the skin's
-    body (`tissue_counterpart`)."""
-    return "phalanx/finger" if tissue_counterpart(key) == "finger" else PLATE_CLASS
+    body (`tissue_counterpart`); by a border crossing it obliquely, the tissue's crossing at
+    that angle (``border/finger@30`` -> ``phalanx/finger@30``, `TISSUE_CROSSINGS`)."""
+    if tissue_counterpart(key) != "finger":
+        return PLATE_CLASS
+    body, _, crossing = class_parts(key)
+    if body == "border" and crossing is not None and crossing != 90.0:
+        return f"phalanx/finger@{crossing:g}"
+    return "phalanx/finger"
+
+
+def tissue_class_curves(key: str, curves: dict[str, Curve]
+                        ) -> tuple[Curve, Curve, tuple[Curve, Curve] | None] | None:
+    """The tissue FE curves (plate, class, crossing) that make the tissue's law of class ``key``
+    (`tissue_class_law`) from ``curves`` (a tissue FE folder's, key -> curve): the plate's and
+    the class's own; for a crossing (`TISSUE_CROSSINGS`) the 90 deg finger's and the long
+    phalanx's pair (across, at the angle). None where one is missing."""
+    plate = curves.get(PLATE_CLASS)
+    if plate is None:
+        return None
+    if key not in TISSUE_CROSSINGS:
+        other = plate if key == PLATE_CLASS else curves.get(key)
+        return None if other is None else (plate, other, None)
+    need = ("phalanx/finger", TISSUE_CROSSING_REFERENCE, key)
+    if any(k not in curves for k in need):
+        return None
+    return plate, curves["phalanx/finger"], (curves[TISSUE_CROSSING_REFERENCE], curves[key])
 
 
 def tissue_curve_file(key: str) -> str:
@@ -241,50 +297,59 @@ def tissue_curve_file(key: str) -> str:
 
 
 def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
-                     other: Curve | None = None) -> SkinLaw:
+                     other: Curve | None = None, cross: tuple[Curve, Curve] | None = None
+                     ) -> SkinLaw:
     """The human tissue's law in class ``key`` (module docstring): `PLATE_CLASS`: ``tissue``
     itself; another class: its elastic force times the tissue FE's force ratio ``other`` (the
     class's curve) over ``plate`` (the plate's) at the same depth, the ratio held at its last
-    value beyond the depth both FE ramps reach (`shape_ratio`); the relaxation is
-    ``tissue``'s.
+    value beyond the depth both FE ramps reach (`shape_ratio`); a crossing (`TISSUE_CROSSINGS`:
+    ``other`` the 90 deg finger's curve) times the ratio of ``cross``, the long phalanx at the
+    angle over across, too. The relaxation is ``tissue``'s. `tissue_class_curves` picks the
+    curves from a tissue FE folder's.
 
     Raises:
-        ValueError: an unknown class, or another class than the plate's without both curves.
+        ValueError: an unknown class, or another class than the plate's without its curves.
     """
-    if key not in CLASSES:
-        raise ValueError(f"class = {key!r}: allowed {', '.join(CLASSES)}")
+    if key not in TISSUE_CLASSES or key == TISSUE_CROSSING_REFERENCE:
+        raise ValueError(f"class = {key!r}: allowed {', '.join((*CLASSES, *TISSUE_CROSSINGS))}")
     if key == PLATE_CLASS:
         return tissue
-    if plate is None or other is None:
+    if plate is None or other is None or (key in TISSUE_CROSSINGS and cross is None):
         raise ValueError(f"the tissue's {key} law needs the tissue FE's plate and {key} curves "
                          f"({TISSUE_FE_FOLDER}/ of the FE root)")
     ratio = shape_ratio(plate, other)
+    crossing = shape_ratio(*cross) if key in TISSUE_CROSSINGS else (lambda d: 1.0)
     top = tissue.elastic.max_mm
     d = np.linspace(0.0, top, 200)[1:]
-    force = tissue.elastic.force(d) * ratio(d)
+    force = tissue.elastic.force(d) * ratio(d) * crossing(d)
     elastic = ElasticLaw.fit(np.concatenate([[0.0], d]), np.concatenate([[0.0], force]),
                              max_mm=top)
-    source = {**tissue.source, "shape_factor": f"tissue FE {key} / plate ({other.label} / "
-              f"{plate.label})"}
+    factor = f"tissue FE {key} / plate ({other.label} / {plate.label})"
+    if key in TISSUE_CROSSINGS:
+        factor = (f"tissue FE phalanx/finger / plate ({other.label} / {plate.label}) x "
+                  f"long phalanx at the crossing / across ({cross[1].label} / {cross[0].label})")
+    source = {**tissue.source, "shape_factor": factor}
     return SkinLaw(f"{tissue.name} ({key})", elastic, tissue.prony, source=source)
 
 
 def tissue_class_data_range(tissue: SkinLaw, key: str, law: SkinLaw, plate: Curve | None = None,
-                        other: Curve | None = None, data_N: float | None = None) -> float:
+                            other: Curve | None = None, data_N: float | None = None,
+                            cross: tuple[Curve, Curve] | None = None) -> float:
     """The force up to which ``law``, the tissue's law in class ``key`` (`tissue_class_law`),
     rests on data. The tissue's data are the plate's (``data_N``, default `DATA_MAX_N` of the
     tissue: the force range over which its exponential was confirmed), so they end at a depth,
     the plate law's at ``data_N``; a class's law is the plate's times the FE's ratio at the same
     depth, so its data end at that depth too, and no deeper than both FE ramps reach (beyond
     it the ratio is a held value, `shape_ratio`). Its force there: a finger class, softer than
-    the plate (ratio 0.7), is calibrated to about 0.7 x ``data_N``, not to ``data_N``."""
+    the plate (ratio 0.7), is calibrated to about 0.7 x ``data_N``, not to ``data_N``. A
+    crossing's (``cross``, `tissue_class_law`) ends no deeper than its long phalanx's ramps."""
     from softhand.laws.references import DATA_MAX_N, HUMAN
 
     top_N = DATA_MAX_N[HUMAN] if data_N is None else float(data_N)
     depth = float(tissue.elastic.displacement_at(top_N))
     if key != PLATE_CLASS and plate is not None and other is not None:
-        depth = min(depth, float(plate.displacement_mm[plate.peak_index]),
-                    float(other.displacement_mm[other.peak_index]))
+        depth = min(depth, *(float(c.displacement_mm[c.peak_index])
+                             for c in (plate, other, *(cross or ()))))
     return float(law.elastic.force(depth))
 
 
