@@ -111,10 +111,9 @@ def test_a_tissue_crossing_law_is_the_finger_law_times_the_long_phalanx_s_crossi
     fit, 2 % of 2 N); its data end no deeper than the long phalanx's ramps; the curves come
     from a folder's by `tissue_class_curves`, and a folder without the long phalanx's gives
     none (the skins' oblique classes are then left out)."""
-    from softhand.skin.contact_classes import (
-        TISSUE_CROSSING_REFERENCE,
-        tissue_class_curves,
-    )
+    from softhand.skin.contact_classes import tissue_class_curves
+
+    TISSUE_CROSSING_REFERENCE = "phalanx/finger@90"  # the long phalanx across
 
     tissue = reference_law(HUMAN)
     d = np.linspace(0.0, 6.0, 200)
@@ -448,7 +447,12 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
     from softhand.envs.handshake import HandshakeEnv
     from softhand.paths import FE_DIR
     from softhand.skin.calibrate import tissue_curves
-    from softhand.skin.contact_classes import PLATE_CLASS, TISSUE_OPTIONAL, class_fallback
+    from softhand.skin.contact_classes import (
+        PLATE_CLASS,
+        TISSUE_OPTIONAL,
+        class_fallback,
+        tissue_class_curves,
+    )
     from softhand.skin.files import load_calibration
 
     cal = load_calibration(HUMAN)
@@ -458,7 +462,7 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
     tissue = reference_law(HUMAN)
     d = np.linspace(0.25, 6.0, 24)
     for key, c in cal.pair_laws.items():
-        want = tissue_class_law(tissue, key, curves[PLATE_CLASS], curves[key])
+        want = tissue_class_law(tissue, key, *tissue_class_curves(key, curves))
         assert np.abs(c.law.elastic.force(d) - want.elastic.force(d)).max() < 0.01 * 2.0, key
         side = partner_tissue_class(key)
         assert c.pair.against == (tissue.name if side == PLATE_CLASS

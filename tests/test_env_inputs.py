@@ -215,7 +215,9 @@ def test_one_range_warning_per_episode_with_its_summary_at_the_callers_line(wrap
         assert summary["worst_force_N"] == seen[summary["worst_pair"]]
         worst = env.unwrapped.pair_laws[summary["worst_pair"]]
         assert summary["worst_limit_N"] == worst.calibrated_max_N and summary["steps"] == len(infos)
-        assert worst.calibrated_max_N in (pytest.approx(4.8, abs=0.1), 7.0)  # a tissue class's
+        # a tissue class's: a finger-like contact's, an oblique border's crossings, a flat's
+        assert worst.calibrated_max_N in (pytest.approx(4.8, abs=0.1), pytest.approx(5.6, abs=0.1),
+                                          pytest.approx(8.7, abs=0.1), 7.0)
         text = str(ranged[0].message)
         assert text.startswith(f"episode ended at t = {summary['time_s']:.2f} s after "
                                f"{summary['steps']} steps: {summary['contact_steps']} "

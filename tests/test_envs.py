@@ -161,7 +161,9 @@ def test_one_and_two_milliseconds_agree_within_5_percent_on_every_region_over_1_
 def test_open_loop_closes_for_the_same_number_of_actions_at_every_timestep():
     """The open-loop close lasts close_s of the simulation clock, a sum of timesteps that lands
     on it from either side: the motors' commanded positions at the end of the grip are the same
-    at 0.5, 1 and 2 ms (to 1e-6 rad; one action apart they differed by 0.0094 rad)."""
+    at 0.5, 1 and 2 ms (to 1e-5 rad: measured 1.2e-6 at most, one motor, since the border's
+    oblique pairs took the tissue's crossing laws, 1e-6 before; one action apart they differed
+    by 0.0094 rad)."""
     ends = []
     for ts in (0.0005, 0.001, 0.002):
         env = HandshakeEnv(timestep_s=ts)
@@ -171,8 +173,8 @@ def test_open_loop_closes_for_the_same_number_of_actions_at_every_timestep():
             obs, _, _, _, info = env.step(ctrl(obs, info))
         ends.append(env.data.act[:6].copy())
         env.close()
-    np.testing.assert_allclose(ends[0], ends[1], atol=1e-6)
-    np.testing.assert_allclose(ends[1], ends[2], atol=1e-6)
+    np.testing.assert_allclose(ends[0], ends[1], atol=1e-5)
+    np.testing.assert_allclose(ends[1], ends[2], atol=1e-5)
 
 
 def test_the_hold_is_read_once_the_shakes_last_swing_has_died_out():

@@ -314,9 +314,9 @@ def _class_settings(key: str) -> dict:
     from softhand.skin.contact_classes import (
         BORDER_GEOMETRY,
         FE_BODY,
+        TISSUE_CROSSING_BASES,
         TISSUE_CROSSING_MESH,
-        TISSUE_CROSSING_REFERENCE,
-        TISSUE_CROSSINGS,
+        TISSUE_CROSSING_REFERENCES,
         TISSUE_LONG_PHALANX,
         class_indenter,
         class_parts,
@@ -326,9 +326,10 @@ def _class_settings(key: str) -> dict:
     extra = {"indenter": class_indenter(key), "body": FE_BODY[body]}
     if body == "border":
         extra["geometry"] = dict(BORDER_GEOMETRY)
-    if key in (TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS):  # the long phalanx
-        extra["geometry"] = dict(TISSUE_LONG_PHALANX)
+    if key in (*TISSUE_CROSSING_REFERENCES, *TISSUE_CROSSING_BASES):  # one mesh for a ratio
         extra["mesh"] = TISSUE_CROSSING_MESH
+        if body == "phalanx":  # the long phalanx
+            extra["geometry"] = dict(TISSUE_LONG_PHALANX)
     return extra
 
 
@@ -495,7 +496,7 @@ def _ratios(folder: Path) -> dict:
     from softhand.laws.references import human_law
     from softhand.skin.calibrate import tissue_curves
     from softhand.skin.contact_classes import (
-        TISSUE_CROSSING_REFERENCE,
+        TISSUE_CROSSING_REFERENCES,
         shape_ratio,
         tissue_class_curves,
         tissue_class_law,
@@ -508,7 +509,7 @@ def _ratios(folder: Path) -> dict:
     out = {"depth_mm": depths, "classes": {}}
     for key in curves:
         found = tissue_class_curves(key, curves)
-        if key == TISSUE_CROSSING_REFERENCE or found is None:  # a reference run, not a law
+        if key in TISSUE_CROSSING_REFERENCES or found is None:  # a reference run, not a law
             continue
         cls = tissue_class_law(law, key, *found)
         out["classes"][key] = {F: float(cls.elastic.force(np.array([d]))[0] / float(F))
@@ -522,6 +523,8 @@ def _ratios(folder: Path) -> dict:
 
 
 def classes_markdown(r: dict) -> str:
+    from softhand.skin.contact_classes import TISSUE_CROSSING_BASES
+
     m = r["material"]
     forces = list(r["ratios"]["depth_mm"])
     lines = [
@@ -557,8 +560,7 @@ def classes_markdown(r: dict) -> str:
     reach = {k: c["max_depth_mm"] for k, c in r["classes"].items()}
     depth = r["ratios"]["depth_mm"]
     for key, v in r["ratios"]["classes"].items():
-        top = min(reach[k] for k in {key, "phalanx/flat", *(
-            ("phalanx/finger", "phalanx/finger@90") if key.startswith("phalanx/finger@") else ())})
+        top = min(reach[k] for k in {key, "phalanx/flat", *TISSUE_CROSSING_BASES.get(key, ())})
         lines.append(f"| {key} | " + " | ".join(
             f"{v[F]:.2f}" + ("*" if depth[F] > top and key != "phalanx/flat" else "")
             for F in forces) + " |")
@@ -588,6 +590,15 @@ def classes_markdown(r: dict) -> str:
             "inside an oblique finger's contact, so these runs use the same section 40 mm long, "
             "on the coarse mesh (the whole part: no symmetry), the reference too, so that the "
             "ratio is one mesh's (`TISSUE_CROSSING_MESH`).",
+            "",
+        ]
+    borders = [k for k in r["ratios"]["classes"] if k.startswith("border/finger@")]
+    if borders:
+        lines += [
+            "The sensored human hand's border crossed obliquely by the partner's finger ("
+            + ", ".join(borders) + "): its border law across times the border stand-in's force "
+            "at the angle over its force across (border/finger@90, a reference run), both on "
+            "the coarse mesh, the whole part.",
             "",
         ]
     return "\n".join(lines)

@@ -29,7 +29,6 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         CLASSES,
         FE_FOLDERS,
         PLATE_CLASS,
-        TISSUE_CROSSING_REFERENCE,
         TISSUE_CROSSINGS,
         TISSUE_FE_FOLDER,
         TISSUE_OPTIONAL,
@@ -63,7 +62,7 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
     # border's oblique crossings the long phalanx's (TISSUE_CROSSINGS); the human tissue's own
     # laws every class's but the border's oblique crossings (TISSUE_OPTIONAL: its pairs there
     # take its border law across, class_fallback)
-    partner = (PLATE_CLASS, "phalanx/finger", TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS)
+    partner = (PLATE_CLASS, "phalanx/finger", "phalanx/finger@90", *TISSUE_CROSSINGS)
     needed = ([k for k in (*CLASSES, *partner[2:]) if k not in TISSUE_OPTIONAL] if HUMAN in names
               else partner)
     lacking = [k for k in needed if k not in tissue]

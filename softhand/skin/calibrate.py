@@ -52,9 +52,9 @@ from softhand.skin.contact_classes import (
     FE_BODY,
     PLATE_CLASS,
     TISSUE_CLASSES,
+    TISSUE_CROSSING_BASES,
     TISSUE_CROSSING_MESH,
-    TISSUE_CROSSING_REFERENCE,
-    TISSUE_CROSSINGS,
+    TISSUE_CROSSING_REFERENCES,
     TISSUE_FE_FOLDER,
     TISSUE_LONG_PHALANX,
     class_curve,
@@ -670,12 +670,11 @@ def tissue_curves(fe_dir: str | Path) -> dict[str, Curve]:
                              f"{got.get('indenter')!r} on {got.get('body')!r}; it needs "
                              f"{want!r} on {body!r}")
         length = (got.get("geometry") or {}).get("length_mm")
-        if key in (TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS) and (
-                length != TISSUE_LONG_PHALANX["length_mm"]):
+        crossing = key in (*TISSUE_CROSSING_REFERENCES, *TISSUE_CROSSING_BASES)
+        if crossing and length != TISSUE_LONG_PHALANX["length_mm"]:
             raise ValueError(f"{where}: class {key} was run on a phalanx {length} mm long; it "
                              f"needs the long phalanx, {TISSUE_LONG_PHALANX['length_mm']:g} mm")
-        if key in (TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS) and (
-                got.get("mesh") != TISSUE_CROSSING_MESH):
+        if crossing and got.get("mesh") != TISSUE_CROSSING_MESH:
             raise ValueError(f"{where}: class {key} was run on the {got.get('mesh')!r} mesh; the "
                              f"crossings and their reference need one mesh, "
                              f"{TISSUE_CROSSING_MESH!r}")

@@ -71,12 +71,14 @@ rests on them to that depth, not to that force (`tissue_class_data_range`): the 
   paper's 10 mm specimen cannot hold an oblique cylinder (it runs off the ends), so the
   crossing comes from a long phalanx (`TISSUE_LONG_PHALANX`, 40 mm as the border stand-in):
   the law is the 90 deg finger law (the specimen's) times the long phalanx's force at the angle
-  over its force across (`TISSUE_CROSSING_REFERENCE`), at the same depth
-  (`tissue_class_law`). A tissue FE folder without those curves leaves the skins' oblique
-  classes out (their pairs take the border's law across, `class_fallback`);
+  over its force across (`TISSUE_CROSSING_BASES`), at the same depth (`tissue_class_law`). A
+  tissue FE folder without those curves leaves the skins' oblique classes out (their pairs take
+  the border's law across, `class_fallback`);
 * the sensored human hand (the paper's protocol, `softhand handshake --hand human`) takes the
   tissue's law of each contact's own class, its pair law against the partner's tissue side as
-  above.
+  above; its border's oblique classes the same way as the partner's phalanx: its border law
+  across times the border stand-in's force at the angle over across, both on the coarse mesh
+  (`TISSUE_CROSSING_BASES`).
 
 A class without FE curves for a skin falls back to the plate law (``phalanx/flat``), and the run
 says so (`pair_law_label`).
@@ -94,7 +96,8 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
 __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY",
            "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS",
-           "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCE",
+           "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES", "TISSUE_CROSSING_MESH",
+           "TISSUE_CROSSING_REFERENCES",
            "TISSUE_FE_FOLDER",
            "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing", "class_curve",
            "class_fallback", "class_indenter", "class_parts", "classify", "fit_class_law", "geom_shape",
@@ -129,26 +132,36 @@ FE_FOLDERS = {"phalanx/flat": "", "phalanx/finger": "finger", "palm/flat": "palm
               "palm/finger": "palm-finger", "border/finger": "border-finger",
               **{f"border/finger@{a:g}": f"border-finger-{a:g}" for a in BORDER_CROSSINGS_DEG[1:]},
               # the tissue's crossing runs (its folder's file names; no skin folder)
-              **{f"phalanx/finger@{a:g}": f"finger-{a:g}" for a in BORDER_CROSSINGS_DEG}}
+              **{f"phalanx/finger@{a:g}": f"finger-{a:g}" for a in BORDER_CROSSINGS_DEG},
+              "border/finger@90": "border-finger-90"}
 #: the FE body (`softhand.fem.solver.IndentationSettings.body`) of each class's body
 FE_BODY = {"phalanx": "phalanx", "palm": "palm", "border": "phalanx"}
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) that stands in for the
 #: palm's rounded border (module docstring)
 BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0, "length_mm": 40.0}
 #: the classes whose tissue FE curves the human tissue's laws may lack: the border's oblique
-#: crossings (the tissue's border FE at 90 deg took 13 minutes on its quarter; an oblique one
-#: needs the whole part, 4x the elements). The sensored human hand's pairs there take its border
-#: law across (`class_fallback`), and its geometry accounting counts them as not fitting
-TISSUE_OPTIONAL = tuple(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
+#: crossings and their reference across (`TISSUE_CROSSING_BASES`; an oblique finger needs the
+#: whole part, 4x a quarter's elements). Without them the sensored human hand's pairs there take
+#: its border law across (`class_fallback`), and its geometry accounting counts them as not
+#: fitting
+TISSUE_OPTIONAL = (*(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:]), "border/finger@90")
 #: the tissue-only classes of the partner's phalanx crossed by a skin's rounded border at an
 #: oblique angle (the partner's side of ``border/finger@A``, `partner_tissue_class`): no skin
 #: has them (a skin's phalanx under an oblique finger keeps ``phalanx/finger``)
 TISSUE_CROSSINGS = tuple(f"phalanx/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
-#: the tissue FE run the crossings are measured against: the same long phalanx, the finger
-#: across it (90 deg); not a law of its own (the 90 deg law is the specimen's, ``phalanx/finger``)
-TISSUE_CROSSING_REFERENCE = "phalanx/finger@90"
+#: the tissue's crossing laws: each oblique class -> (its 90 deg class, whose law it scales; the
+#: reference run across on the crossing's own body and mesh, ``@90``: not a law of its own). The
+#: partner's phalanx crossed on the long phalanx; the sensored human hand's border on the border
+#: stand-in (`tissue_class_law`)
+TISSUE_CROSSING_BASES = {
+    **{f"phalanx/finger@{a:g}": ("phalanx/finger", "phalanx/finger@90")
+       for a in BORDER_CROSSINGS_DEG[1:]},
+    **{f"border/finger@{a:g}": ("border/finger", "border/finger@90")
+       for a in BORDER_CROSSINGS_DEG[1:]}}
+#: the reference runs across of `TISSUE_CROSSING_BASES`
+TISSUE_CROSSING_REFERENCES = ("phalanx/finger@90", "border/finger@90")
 #: every class the tissue FE folder may hold a curve of
-TISSUE_CLASSES = (*CLASSES, TISSUE_CROSSING_REFERENCE, *TISSUE_CROSSINGS)
+TISSUE_CLASSES = (*CLASSES, *TISSUE_CROSSING_REFERENCES, *TISSUE_CROSSINGS)
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) of the tissue's
 #: crossing runs: the paper's section, as long as the border stand-in, so that an oblique finger
 #: stays on it (the paper's 10 mm specimen has free ends within the finger's contact)
@@ -276,18 +289,18 @@ def tissue_class_curves(key: str, curves: dict[str, Curve]
                         ) -> tuple[Curve, Curve, tuple[Curve, Curve] | None] | None:
     """The tissue FE curves (plate, class, crossing) that make the tissue's law of class ``key``
     (`tissue_class_law`) from ``curves`` (a tissue FE folder's, key -> curve): the plate's and
-    the class's own; for a crossing (`TISSUE_CROSSINGS`) the 90 deg finger's and the long
-    phalanx's pair (across, at the angle). None where one is missing."""
+    the class's own; for a crossing (`TISSUE_CROSSING_BASES`) its 90 deg class's and the pair
+    of its reference run across and its run at the angle. None where one is missing."""
     plate = curves.get(PLATE_CLASS)
     if plate is None:
         return None
-    if key not in TISSUE_CROSSINGS:
+    if key not in TISSUE_CROSSING_BASES:
         other = plate if key == PLATE_CLASS else curves.get(key)
         return None if other is None else (plate, other, None)
-    need = ("phalanx/finger", TISSUE_CROSSING_REFERENCE, key)
-    if any(k not in curves for k in need):
+    base, reference = TISSUE_CROSSING_BASES[key]
+    if any(k not in curves for k in (base, reference, key)):
         return None
-    return plate, curves["phalanx/finger"], (curves[TISSUE_CROSSING_REFERENCE], curves[key])
+    return plate, curves[base], (curves[reference], curves[key])
 
 
 def tissue_curve_file(key: str) -> str:
@@ -302,32 +315,35 @@ def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
     """The human tissue's law in class ``key`` (module docstring): `PLATE_CLASS`: ``tissue``
     itself; another class: its elastic force times the tissue FE's force ratio ``other`` (the
     class's curve) over ``plate`` (the plate's) at the same depth, the ratio held at its last
-    value beyond the depth both FE ramps reach (`shape_ratio`); a crossing (`TISSUE_CROSSINGS`:
-    ``other`` the 90 deg finger's curve) times the ratio of ``cross``, the long phalanx at the
-    angle over across, too. The relaxation is ``tissue``'s. `tissue_class_curves` picks the
+    value beyond the depth both FE ramps reach (`shape_ratio`); a crossing
+    (`TISSUE_CROSSING_BASES`: ``other`` its 90 deg class's curve) times the ratio of ``cross``,
+    its body at the angle over across, too. The relaxation is ``tissue``'s. `tissue_class_curves` picks the
     curves from a tissue FE folder's.
 
     Raises:
         ValueError: an unknown class, or another class than the plate's without its curves.
     """
-    if key not in TISSUE_CLASSES or key == TISSUE_CROSSING_REFERENCE:
+    if key not in TISSUE_CLASSES or key in TISSUE_CROSSING_REFERENCES:
         raise ValueError(f"class = {key!r}: allowed {', '.join((*CLASSES, *TISSUE_CROSSINGS))}")
     if key == PLATE_CLASS:
         return tissue
-    if plate is None or other is None or (key in TISSUE_CROSSINGS and cross is None):
+    crossing = key in TISSUE_CROSSING_BASES
+    if plate is None or other is None or (crossing and cross is None):
         raise ValueError(f"the tissue's {key} law needs the tissue FE's plate and {key} curves "
                          f"({TISSUE_FE_FOLDER}/ of the FE root)")
     ratio = shape_ratio(plate, other)
-    crossing = shape_ratio(*cross) if key in TISSUE_CROSSINGS else (lambda d: 1.0)
+    cross_ratio = shape_ratio(*cross) if crossing else (lambda d: 1.0)
     top = tissue.elastic.max_mm
     d = np.linspace(0.0, top, 200)[1:]
-    force = tissue.elastic.force(d) * ratio(d) * crossing(d)
+    force = tissue.elastic.force(d) * ratio(d) * cross_ratio(d)
     elastic = ElasticLaw.fit(np.concatenate([[0.0], d]), np.concatenate([[0.0], force]),
                              max_mm=top)
     factor = f"tissue FE {key} / plate ({other.label} / {plate.label})"
-    if key in TISSUE_CROSSINGS:
-        factor = (f"tissue FE phalanx/finger / plate ({other.label} / {plate.label}) x "
-                  f"long phalanx at the crossing / across ({cross[1].label} / {cross[0].label})")
+    if crossing:
+        base = TISSUE_CROSSING_BASES[key][0]
+        body = "long phalanx" if base.startswith("phalanx") else "border stand-in"
+        factor = (f"tissue FE {base} / plate ({other.label} / {plate.label}) x {body} at the "
+                  f"crossing / across ({cross[1].label} / {cross[0].label})")
     source = {**tissue.source, "shape_factor": factor}
     return SkinLaw(f"{tissue.name} ({key})", elastic, tissue.prony, source=source)
 
