@@ -579,28 +579,26 @@ def classes_markdown(r: dict) -> str:
         "palm with curved indenters were found to check these ratios against.",
         "",
     ]
-    crossings = [k for k in r["ratios"]["classes"] if k.startswith("phalanx/finger@")]
-    if crossings:
-        lines += [
-            "The partner's phalanx crossed obliquely by the skin's rounded border ("
-            + ", ".join(crossings) + ": the partner's side of the border's oblique classes, "
+    crossings = {  # each kind of crossing: the words around its classes
+        "phalanx/finger@": (
+            "The partner's phalanx crossed obliquely by the skin's rounded border (",
+            ": the partner's side of the border's oblique classes, "
             "`softhand.skin.contact_classes.partner_tissue_class`): the 90 deg finger law times "
             "the long phalanx's force at the angle over its force across (phalanx/finger@90, a "
             "reference run, no law), at the same depth. The paper's 10 mm specimen has free ends "
             "inside an oblique finger's contact, so these runs use the same section 40 mm long, "
             "on the coarse mesh (the whole part: no symmetry), the reference too, so that the "
-            "ratio is one mesh's (`TISSUE_CROSSING_MESH`).",
-            "",
-        ]
-    borders = [k for k in r["ratios"]["classes"] if k.startswith("border/finger@")]
-    if borders:
-        lines += [
-            "The sensored human hand's border crossed obliquely by the partner's finger ("
-            + ", ".join(borders) + "): its border law across times the border stand-in's force "
-            "at the angle over its force across (border/finger@90, a reference run), both on "
-            "the coarse mesh, the whole part.",
-            "",
-        ]
+            "ratio is one mesh's (`TISSUE_CROSSING_MESH`)."),
+        "border/finger@": (
+            "The sensored human hand's border crossed obliquely by the partner's finger (",
+            "): its border law across times the border stand-in's force at the angle over its "
+            "force across (border/finger@90, a reference run), both on the coarse mesh, the "
+            "whole part."),
+    }
+    for prefix, (head, tail) in crossings.items():
+        keys = [k for k in r["ratios"]["classes"] if k.startswith(prefix)]
+        if keys:
+            lines += [head + ", ".join(keys) + tail, ""]
     return "\n".join(lines)
 
 
