@@ -401,11 +401,10 @@ def test_the_shipped_tissue_curves_are_the_tissue_fe_of_every_class(tmp_path):
         PLATE_CLASS,
         TISSUE_CLASSES,
         TISSUE_FE_FOLDER,
-        TISSUE_OPTIONAL,
     )
 
     curves = tissue_curves(FE_DIR)
-    assert set(TISSUE_CLASSES) - set(TISSUE_OPTIONAL) <= set(curves) <= set(TISSUE_CLASSES)
+    assert set(curves) == set(TISSUE_CLASSES)  # the optional ones shipped too
     plate = curves[PLATE_CLASS]
     law = reference_law(HUMAN)
     i = plate.peak_index
@@ -441,24 +440,20 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
     """The sensored human hand (the paper's protocol) has a law per contact class: the
     tissue's plate law times the tissue FE's class/plate ratio (the shipped curves, to the
     spline fit: 1 % of 2 N), each with its pair law against the partner's side
-    (`partner_tissue_class`); every pair of the human handshake carries its own class's law,
-    none the plate fallback, but the border's oblique crossings: the border's law across
-    (the tissue has no FE of them, `TISSUE_OPTIONAL`)."""
+    (`partner_tissue_class`: an oblique border's partner side the tissue's crossing); the
+    shipped tissue FE has every class, the border's oblique crossings included
+    (`TISSUE_CROSSING_BASES`), so every pair of the human handshake carries its own class's law,
+    none a fallback."""
     from softhand.envs.handshake import HandshakeEnv
     from softhand.paths import FE_DIR
     from softhand.skin.calibrate import tissue_curves
-    from softhand.skin.contact_classes import (
-        PLATE_CLASS,
-        TISSUE_OPTIONAL,
-        class_fallback,
-        tissue_class_curves,
-    )
+    from softhand.skin.contact_classes import PLATE_CLASS, TISSUE_OPTIONAL, tissue_class_curves
     from softhand.skin.files import load_calibration
 
     cal = load_calibration(HUMAN)
     curves = tissue_curves(FE_DIR)
     assert set(cal.pair_laws) == set(curves) & set(CLASSES)  # every class the tissue's FE has
-    assert set(CLASSES) - set(TISSUE_OPTIONAL) <= set(curves)
+    assert set(TISSUE_OPTIONAL) <= set(curves) and set(cal.pair_laws) == set(CLASSES)
     tissue = reference_law(HUMAN)
     d = np.linspace(0.25, 6.0, 24)
     for key, c in cal.pair_laws.items():
@@ -469,8 +464,8 @@ def test_the_human_hand_takes_the_tissue_s_own_class_laws():
                                   else f"{tissue.name} ({side})"), key
     env = HandshakeEnv(hand="human")
     laws = {p.law for p in env.pair_laws.values()}
-    assert all(p.law == (p.contact if p.contact in cal.pair_laws else class_fallback(p.contact))
-               for p in env.pair_laws.values()), laws
+    assert all(p.law == p.contact for p in env.pair_laws.values()), laws
+    assert {"border/finger@60", "border/finger@30"} <= laws, laws
 
 
 @pytest.mark.parametrize("skin", ["pocket2-sil", HUMAN])

@@ -60,7 +60,8 @@ FE's prediction, and the layer's constants are assumptions (`TISSUE_FE_FOLDER`'s
 records them). The tissue's data (a flat plate to 7 N) end at a depth, 6.24 mm; a class's law
 rests on them to that depth, not to that force (`tissue_class_data_range`): the finger class
 (0.69 x the plate's force) is calibrated to 4.8 N, its crossings to 5.6 N (60 deg) and 8.7 N
-(30 deg), the border class to 9.5 N, and the palm slab's (its FE stops at 2.07 mm) to 3.9 N.
+(30 deg), the border class to 13.4 N, its crossings to 11.8 N (60 deg: its FE stops at 5.75 mm)
+and 6.7 N (30 deg: at 3.72 mm), and the palm slab's (its FE stops at 2.07 mm) to 3.9 N.
 
 * the partner's tissue side of a pair is pressed by the skin's body: a prosthetic phalanx (or
   a rounded border, of a finger's radius) like a finger, a palm face like a flat
