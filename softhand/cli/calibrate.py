@@ -29,10 +29,11 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         CLASSES,
         FE_FOLDERS,
         PLATE_CLASS,
-        TISSUE_CROSSINGS,
         TISSUE_FE_FOLDER,
         TISSUE_OPTIONAL,
         class_curve,
+        partner_tissue_class,
+        tissue_class_needs,
     )
     from softhand.skin.files import load_calibration
 
@@ -58,13 +59,12 @@ def _check_class_laws_inputs(names: list[str], out: Path, fe_dir: str) -> None:
         tissue = tissue_curves(fe_dir)
     except ValueError as exc:
         bad(f"--fe-dir {fe_dir!r}: {exc}")
-    # the partner's side of the finger classes needs the plate and finger curves, of the
-    # border's oblique crossings the long phalanx's (TISSUE_CROSSINGS); the human tissue's own
-    # laws every class's but the border's oblique crossings (TISSUE_OPTIONAL: its pairs there
-    # take its border law across, class_fallback)
-    partner = (PLATE_CLASS, "phalanx/finger", "phalanx/finger@90", *TISSUE_CROSSINGS)
-    needed = ([k for k in (*CLASSES, *partner[2:]) if k not in TISSUE_OPTIONAL] if HUMAN in names
-              else partner)
+    # every class's partner side (partner_tissue_class: the oblique border's crossings too);
+    # the human tissue's own laws every class's but the border's oblique crossings
+    # (TISSUE_OPTIONAL: its pairs there take its border law across, class_fallback)
+    own = [k for k in CLASSES if k not in TISSUE_OPTIONAL] if HUMAN in names else []
+    keys = [partner_tissue_class(k) for k in CLASSES] + own
+    needed = dict.fromkeys(n for k in keys for n in tissue_class_needs(k))
     lacking = [k for k in needed if k not in tissue]
     if lacking:
         bad(f"--fe-dir {fe_dir!r}: no tissue FE curve of {', '.join(lacking)} in "

@@ -714,8 +714,8 @@ def class_pair_laws(design: str, law: SkinLaw, plate_curve: Curve, fe_dir: str |
     out: dict[str, ClassLaw] = {}
 
     def data_range(key: str, law: SkinLaw) -> float:  # the tissue class law's data range
-        plate, other, cross = tissue_class_curves(key, tcurves) or (tplate, None, None)
-        return tissue_class_data_range(tissue, key, law, plate, other, cross=cross)
+        t_plate, other, cross = tissue_class_curves(key, tcurves) or (tplate, None, None)
+        return tissue_class_data_range(tissue, key, law, t_plate, other, cross=cross)
 
     for key in CLASSES:
         t_key = partner_tissue_class(key)

@@ -98,12 +98,11 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY",
            "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS",
            "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES", "TISSUE_CROSSING_MESH",
-           "TISSUE_CROSSING_REFERENCES",
-           "TISSUE_FE_FOLDER",
-           "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing", "class_curve",
-           "class_fallback", "class_indenter", "class_parts", "classify", "fit_class_law", "geom_shape",
-           "partner_tissue_class", "shape_ratio", "tissue_class_curves", "tissue_class_data_range",
-           "tissue_class_law", "tissue_counterpart", "tissue_curve_file"]
+           "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_FOLDER", "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL",
+           "border_class", "class_crossing", "class_curve", "class_fallback", "class_indenter",
+           "class_parts", "classify", "fit_class_law", "geom_shape", "partner_tissue_class",
+           "shape_ratio", "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
+           "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
@@ -146,10 +145,6 @@ BORDER_GEOMETRY = {"width_mm": 20.0, "height_mm": 8.0, "length_mm": 40.0}
 #: its border law across (`class_fallback`), and its geometry accounting counts them as not
 #: fitting
 TISSUE_OPTIONAL = (*(f"border/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:]), "border/finger@90")
-#: the tissue-only classes of the partner's phalanx crossed by a skin's rounded border at an
-#: oblique angle (the partner's side of ``border/finger@A``, `partner_tissue_class`): no skin
-#: has them (a skin's phalanx under an oblique finger keeps ``phalanx/finger``)
-TISSUE_CROSSINGS = tuple(f"phalanx/finger@{a:g}" for a in BORDER_CROSSINGS_DEG[1:])
 #: the tissue's crossing laws: each oblique class -> (its 90 deg class, whose law it scales; the
 #: reference run across on the crossing's own body and mesh, ``@90``: not a law of its own). The
 #: partner's phalanx crossed on the long phalanx; the sensored human hand's border on the border
@@ -159,8 +154,13 @@ TISSUE_CROSSING_BASES = {
        for a in BORDER_CROSSINGS_DEG[1:]},
     **{f"border/finger@{a:g}": ("border/finger", "border/finger@90")
        for a in BORDER_CROSSINGS_DEG[1:]}}
+#: the tissue-only classes of `TISSUE_CROSSING_BASES`: the partner's phalanx crossed by a skin's
+#: rounded border at an oblique angle (the partner's side of ``border/finger@A``,
+#: `partner_tissue_class`); no skin has them (a skin's phalanx under an oblique finger keeps
+#: ``phalanx/finger``)
+TISSUE_CROSSINGS = tuple(k for k in TISSUE_CROSSING_BASES if k not in CLASSES)
 #: the reference runs across of `TISSUE_CROSSING_BASES`
-TISSUE_CROSSING_REFERENCES = ("phalanx/finger@90", "border/finger@90")
+TISSUE_CROSSING_REFERENCES = tuple(dict.fromkeys(r for _, r in TISSUE_CROSSING_BASES.values()))
 #: every class the tissue FE folder may hold a curve of
 TISSUE_CLASSES = (*CLASSES, *TISSUE_CROSSING_REFERENCES, *TISSUE_CROSSINGS)
 #: the phalanx geometry (`softhand.fem.geometry.PhalanxGeometry` fields) of the tissue's
@@ -286,21 +286,28 @@ def partner_tissue_class(key: str) -> str:
     return "phalanx/finger"
 
 
+def tissue_class_needs(key: str) -> tuple[str, ...]:
+    """The tissue FE curves (class keys) that make the tissue's law of class ``key``: the
+    plate's and the class's own; a crossing's (`TISSUE_CROSSING_BASES`) its 90 deg class's, its
+    reference run across and its run at the angle."""
+    if key not in TISSUE_CROSSING_BASES:
+        return tuple(dict.fromkeys((PLATE_CLASS, key)))
+    return (PLATE_CLASS, *TISSUE_CROSSING_BASES[key], key)
+
+
 def tissue_class_curves(key: str, curves: dict[str, Curve]
                         ) -> tuple[Curve, Curve, tuple[Curve, Curve] | None] | None:
     """The tissue FE curves (plate, class, crossing) that make the tissue's law of class ``key``
     (`tissue_class_law`) from ``curves`` (a tissue FE folder's, key -> curve): the plate's and
     the class's own; for a crossing (`TISSUE_CROSSING_BASES`) its 90 deg class's and the pair
-    of its reference run across and its run at the angle. None where one is missing."""
-    plate = curves.get(PLATE_CLASS)
-    if plate is None:
+    of its reference run across and its run at the angle (`tissue_class_needs`). None where one
+    is missing."""
+    if any(k not in curves for k in tissue_class_needs(key)):
         return None
+    plate = curves[PLATE_CLASS]
     if key not in TISSUE_CROSSING_BASES:
-        other = plate if key == PLATE_CLASS else curves.get(key)
-        return None if other is None else (plate, other, None)
+        return plate, curves[key], None
     base, reference = TISSUE_CROSSING_BASES[key]
-    if any(k not in curves for k in (base, reference, key)):
-        return None
     return plate, curves[base], (curves[reference], curves[key])
 
 
