@@ -19,6 +19,7 @@ from softhand.paths import CALIBRATION_DIR, FE_DIR, SKINS_DIR
 
 FAST = ["--mode", "2d", "--hold", "0"]
 HAND = str(Path(__file__).resolve().parent / "data" / "menagerie_style_hand.xml")
+SCENE = str(Path(__file__).resolve().parents[1] / "models" / "mjcf" / "handshake_scene.xml")
 
 
 @pytest.fixture(autouse=True)
@@ -224,6 +225,10 @@ def test_geometry_overrides(args, needles):
       "index_tip=solid-pu", "--max-force", "50"], ["'--max-force'", "0.5 <= x <= 20 N"]),
     (["skin", "apply", "no_such_hand.xml", "x.xml", "--geom", "index_tip=solid-pu"],
      ["HAND 'no_such_hand.xml'"]),
+    (["skin", "apply", HAND, "x.xml", "--geom", "index_tip=solid-pu", "--keyframe", "grip"],
+     ["--keyframe 'grip'", "has no keyframe"]),
+    (["skin", "apply", SCENE, "x.xml", "--geom", "pro_skin_Palm=solid-pu", "--keyframe", "grip"],
+     ["--keyframe 'grip'", "the keyframes 'grasp'"]),
     (["skin", "flex-press", "--region", "Palm1"], ["--region 'Palm1'", "Index3"]),
     (["skin", "flex-press", "--design", "rubber"], ["--design 'rubber'", "pocket2-sil"]),
     (["skin", "flex-press", "--speed", "0"], ["'--speed'", "0.01 <= x <= 100 mm/s"]),

@@ -19,6 +19,7 @@ from softhand.paths import FE_DIR
 from softhand.skin.apply import apply_skin, skin_law_error, write_skinned
 from softhand.skin.calibrate import fe_curves
 from softhand.skin.representations import loading_ramp
+from softhand.skin.rig import pair_law_values
 
 HAND = Path(__file__).resolve().parent / "data" / "menagerie_style_hand.xml"
 
@@ -138,10 +139,10 @@ def test_each_pair_takes_the_law_of_its_contact_class():
                              "skin_index_tip__thumb_tip": "phalanx/finger"}
     from softhand.paths import SKINS_DIR
     from softhand.skin.apply import _class_law
-    from softhand.skin.rig import pair_law_values
 
     cal = load_calibration("pocket2-sil")
-    finger = _class_law("pocket2-sil", "phalanx/finger", None, SKINS_DIR)
+    key, finger = _class_law("pocket2-sil", "phalanx/finger", None, SKINS_DIR)
+    assert key == "phalanx/finger"
     # at 2-3 mm, where both 0-20 N soft contacts follow their laws (below 1 mm a single soft
     # contact cannot follow a pocket's soft start: docs/mujoco.md, "What one soft contact can and cannot do")
     d = np.array([2.0, 2.5, 3.0])
@@ -398,3 +399,44 @@ def test_skinning_a_geom_of_the_world_says_why_nothing_is_left_to_press_it():
     skinned = apply_skin(mujoco.MjSpec.from_string(xml), {"floor": "pocket2-sil"},
                          against=["box"])
     assert [s.geom for s in skinned] == ["floor"]
+
+
+def test_skin_apply_at_the_scene_s_grasp_gives_each_pair_the_scene_s_class():
+    """One path from a pair's geometry to its class (issue 36, item 4): skin apply on the shipped
+    handshake scene's MJCF, at its ``grasp`` keyframe, gives each pair of the palm's skin and a
+    partner tissue geom the class the scene gave the same pair (`softhand.envs.skins
+    .pair_choices`: the border's, at the finger's crossing, where the grasp puts the finger on
+    the palm's rounded border; the geoms' otherwise), and its law; at qpos0, where the partner's
+    hand lies elsewhere, no pair is a border's."""
+    from softhand.envs.skins import GRASP_KEY, pair_choices, parse_skins
+    from softhand.paths import SKINS_DIR
+    from softhand.skin.apply import _class_law
+
+    xml = Path(__file__).resolve().parents[1] / "models" / "mjcf" / "handshake_scene.xml"
+    scene = mujoco.MjModel.from_xml_path(str(xml))
+    choices = pair_choices(scene, parse_skins()[0])
+    palm = {}
+    for pid in range(scene.npair):
+        g1, g2 = (scene.geom(int(g)).name for g in (scene.pair_geom1[pid], scene.pair_geom2[pid]))
+        if "pro_skin_Palm" in (g1, g2):
+            palm[g2 if g1 == "pro_skin_Palm" else g1] = choices[scene.pair(pid).name].contact
+    assert len(palm) >= 10
+    borders = {o for o, key in palm.items() if key.startswith("border/finger")}
+    assert {f"hum_tissue_{f}_proximal" for f in ("index", "middle", "ring", "little")} <= borders
+    assert {"border/finger@60", "border/finger@30"} <= set(palm.values())
+
+    spec = mujoco.MjSpec.from_file(str(xml))
+    (skin,) = apply_skin(spec, {"pro_skin_Palm": "pocket2-sil"}, against=list(palm),
+                         keyframe=GRASP_KEY)
+    got = {name.removeprefix("skin_pro_skin_Palm__"): law
+           for name, law in skin.pair_laws.items()}
+    assert got == palm  # each the class's own law: pocket2-sil has every class
+    model = spec.compile()
+    for other, key in palm.items():
+        name = f"skin_pro_skin_Palm__{other}"
+        want = pair_law_values(model, name, _class_law("pocket2-sil", key, None, SKINS_DIR)[1])
+        np.testing.assert_allclose(spec.pair(name).solref, want[0], rtol=1e-12)
+
+    spec = mujoco.MjSpec.from_file(str(xml))
+    (skin,) = apply_skin(spec, {"pro_skin_Palm": "pocket2-sil"}, against=list(palm))
+    assert not any(k.startswith("border") for k in skin.pair_laws.values())

@@ -37,9 +37,13 @@ def skin() -> None:
 @click.option("--max-force", "max_force", type=Number(0.5, 20.0, unit="N"), default=None,
               help="Fit each skin's soft contact to its FE loading curve up to this force, "
                    "0.5-20 N (more accurate below it) [default: the shipped 0-20 N law].")
+@click.option("--keyframe", "keyframe", default=None, metavar="NAME",
+              help="Read each pair's contact class at this keyframe of HAND (the posture where "
+                   "the hand holds what it touches: a finger on a mesh palm's rounded border "
+                   "takes the border's law at its crossing) [default: HAND's qpos0].")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the skinned geoms and every change made to HAND as JSON.")
-def skin_apply(hand, out, geom_items, against, max_force, as_json) -> None:
+def skin_apply(hand, out, geom_items, against, max_force, keyframe, as_json) -> None:
     """Give the named geoms of the MJCF HAND a calibrated skin and write the model to OUT (.xml).
 
     Each skinned geom meets each counterpart through a <pair> with the design's law in
@@ -66,6 +70,10 @@ def skin_apply(hand, out, geom_items, against, max_force, as_json) -> None:
         spec.compile()
     except ValueError as exc:
         bad(f"HAND {hand!r} does not load in MuJoCo: {str(exc).splitlines()[0]}")
+    keys = [k.name for k in spec.keys]
+    if keyframe is not None and keyframe not in keys:
+        bad(f"--keyframe {keyframe!r}: HAND {hand!r} has "
+            + (f"the keyframes {', '.join(repr(k) for k in keys)}" if keys else "no keyframe"))
     known = {g.name for g in spec.geoms}
     try:
         check_skinnable(source, [g for g in geoms if g in known])
@@ -73,7 +81,8 @@ def skin_apply(hand, out, geom_items, against, max_force, as_json) -> None:
         bad(f"--geom: HAND {hand!r}: {exc}")
     try:
         skinned = apply_skin(spec, {g: f"{d}@{r}" for g, (d, r) in geoms.items()},
-                             against=list(against) or None, max_force_N=max_force)
+                             against=list(against) or None, max_force_N=max_force,
+                             keyframe=keyframe)
     except ValueError as exc:
         bad(f"--geom / --against: {exc}")
     try:

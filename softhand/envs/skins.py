@@ -31,12 +31,12 @@ from softhand.skin.calibrate import skin_names
 from softhand.skin.contact_classes import (
     CLASSES,
     PLATE_CLASS,
-    border_class,
-    class_fallback,
+    class_parts,
     classify,
+    law_class,
 )
 from softhand.skin.files import SKINS_DIR, load_calibration
-from softhand.skin.local_geometry import LocalGeometry, crossing_deg
+from softhand.skin.local_geometry import LocalGeometry, state_class
 from softhand.skin.representations import (
     REPRESENTATIONS,
     HandPad,
@@ -49,10 +49,10 @@ from softhand.validate import show
 
 __all__ = [
     "BORDER_PAIRS_TEXT",
-    "BORDER_REACH_M",
     "CONTACT_LAWS",
     "DEFAULT_DESIGN",
     "DEFAULT_REPRESENTATION",
+    "GRASP_KEY",
     "HAND_REPRESENTATIONS",
     "OUTWARD",
     "PAD_TESTED_MAX_TIMESTEP_S",
@@ -60,7 +60,6 @@ __all__ = [
     "CalibratedRangeWarning",
     "PairChoice",
     "add_skin_pairs",
-    "border_crossings",
     "border_pairs",
     "calibrated_max_force",
     "check_contact_laws",
@@ -336,16 +335,8 @@ def check_contact_laws(value: str) -> str:
     return value
 
 
-#: a partner geom this close to the palm's skin at the grasp (m) is placed where it is nearest:
-#: the grasp presses the hands 0.5-1.5 mm into each other, and a finger a few millimetres off the
-#: palm there meets it where it is nearest once the grip closes. The fingertips lie 5-14 mm off
-#: the palm at the grasp (default hands) and keep the palm/finger law, though they close onto the
-#: border (12 % of the default run's force). A 30 mm reach gives them the border's law (89 % of
-#: the force through it, seeds 0-2), but the softer fingertips let the palms part 1.4 mm at
-#: mid-shake (the load-path criterion is 1 mm) and the grip of a 216 x 73 mm partner miss its
-#: target by 25 % (95th percentile; criterion 15 %): kept at 5 mm until the fingertips' contact is
-#: understood
-BORDER_REACH_M = 0.005
+#: the name of the scene's keyframe of its grasp (`write_skin_laws`)
+GRASP_KEY = "grasp"
 #: the name of the scene's custom text that lists the pairs whose finger the grasp puts on a
 #: rounded palm border (space-separated pair names; absent: none): the MJCF carries the choice
 BORDER_PAIRS_TEXT = "softhand_border_pairs"
@@ -359,40 +350,23 @@ def _skin_first(model: mujoco.MjModel, pid: int) -> tuple[int, int]:
     return g1, g2
 
 
-def border_crossings(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, float | None]:
-    """The skin pairs of class ``palm/finger`` (a palm's skin and a finger) whose two geoms,
-    at the state in ``data`` (the handshake's grasp: `softhand.hands.grasp.set_grasp_state`),
-    are within `BORDER_REACH_M` and nearest where the palm's surface is a rounded border
-    (`softhand.skin.local_geometry`: the hull's normals within 6 mm spread over 15 deg), not
-    its flat face, each with the finger's crossing there (deg, the angle between the finger's
-    axis and the border's edge; None where either has no axis)."""
-    local = LocalGeometry(model)
-    fromto = np.zeros(6)
-    out = {}
-    for pid in range(model.npair):
-        g1, g2 = _skin_first(model, pid)
-        if classify(model, g1, g2) != "palm/finger":
-            continue
-        dist = mujoco.mj_geomDistance(model, data, g1, g2, BORDER_REACH_M, fromto)
-        if dist >= BORDER_REACH_M:
-            continue
-        palm = local.shape(data, g1, fromto[:3])
-        if palm.kind == "border":
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)
-            out[name] = crossing_deg(palm, local.shape(data, g2, fromto[3:]))
-    return out
-
-
 def border_pairs(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, str]:
-    """The pairs of `border_crossings` at the state in ``data``, each with the border class of
-    its finger's crossing (`softhand.skin.contact_classes.border_class`): pair name ->
-    ``border/finger`` or ``border/finger@A``.
+    """The skin pairs of ``model`` whose finger, at the state in ``data`` (the handshake's grasp:
+    `softhand.hands.grasp.set_grasp_state`), lies on a rounded palm border, each with the border
+    class of its crossing there (`softhand.skin.local_geometry.state_class`, the path ``softhand
+    skin apply`` takes too): pair name -> ``border/finger`` or ``border/finger@A``.
 
     A pair's law is one for its whole episode, so where its finger lies at the grasp decides;
     a finger that slides from the border onto the face, or turns to another crossing, keeps the
     law of where it began (the run's geometry accounting measures the force that did).
     """
-    return {name: border_class(x) for name, x in border_crossings(model, data).items()}
+    local = LocalGeometry(model)
+    out = {}
+    for pid in range(model.npair):
+        key = state_class(model, data, *_skin_first(model, pid), local=local)
+        if class_parts(key)[0] == "border":
+            out[mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_PAIR, pid) or str(pid)] = key
+    return out
 
 
 def _border_text(borders: Mapping[str, str]) -> str:
@@ -471,10 +445,10 @@ def pair_choices(model: mujoco.MjModel, skins: Mapping[str, str],
         cal = _calibration(skin, str(directory))
         by_class = cal.pair_laws.get(contact) if contact_laws == "geometry" else None
         contact_law = contact
-        while by_class is None and contact_laws == "geometry" and class_fallback(contact_law):
+        if by_class is None and contact_laws == "geometry":
             # no FE curve of this class for the skin (a search's winner has no border's): the
             # nearest class's law
-            contact_law = class_fallback(contact_law)
+            contact_law = law_class(contact, cal.pair_laws) or contact
             by_class = cal.pair_laws.get(contact_law)
         if by_class is not None:
             law, params, top = contact_law, by_class.pair.params, by_class.pair.calibrated_max_N
@@ -508,7 +482,8 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
     ``soft-contact+relaxation`` moves the geom onto a relaxation pad along its outward normal
     (`OUTWARD`) and gives its pairs the tissue's law alone; ``rigid``: the tissue's law.
     Everything is written into the spec before the caller compiles it, so the MJCF of the spec
-    (``spec.to_xml()``, ``models/mjcf/handshake_scene.xml``) is the simulated model. The pair's
+    (``spec.to_xml()``, ``models/mjcf/handshake_scene.xml``) is the simulated model; with
+    ``grasp``, it holds the grasp as its keyframe `GRASP_KEY`. The pair's
     inverse inertia that scales each law is read from one compile of the spec with the pairs.
 
     Returns:
@@ -528,15 +503,18 @@ def write_skin_laws(spec: mujoco.MjSpec, skins: Mapping[str, str],
                         outward=OUTWARD.get(key, PALMAR), hand_pad=hand_pad)
     names = add_skin_pairs(spec, pro=pro)
     model = spec.compile()
-    if grasp is not None and contact_laws == "geometry":
+    if grasp is not None:
         from softhand.hands.grasp import set_grasp_state
 
         at = mujoco.MjData(model)
         set_grasp_state(model, at, grasp)
-        borders = border_pairs(model, at)
+        # the grasp as a keyframe: the state the pairs' classes are read at, for a viewer and
+        # for ``softhand skin apply --keyframe grasp`` (the same classes, tests/test_skin_apply.py)
+        spec.add_key(name=GRASP_KEY, qpos=at.qpos.tolist())
+        borders = border_pairs(model, at) if contact_laws == "geometry" else {}
         if borders:
             spec.add_text(name=BORDER_PAIRS_TEXT, data=_border_text(borders))
-            model = spec.compile()
+        model = spec.compile()
     choices = pair_choices(model, skins, reps, directory=directory, contact_laws=contact_laws)
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
     data = mujoco.MjData(model)  # qpos0, for every pair's mobility

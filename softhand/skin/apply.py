@@ -18,13 +18,21 @@ skin pads on an `mujoco.MjSpec`:
   fits it, in closed form, to the shipped FE loading curve up to that force, which is more
   accurate below it (`skin_law_error` measures it; pocket2-sil fitted to 5 N follows its FE
   curve up to 2 N within 3 % RMS of 2 N on a fingertip, tests/test_skin_apply.py);
-* each pair's law follows its contact class (`softhand.skin.contact_classes`): a round
-  skinned geom (capsule, cylinder, sphere, ellipsoid) is a phalanx, a flat one (mesh, box) a palm;
-  a counterpart round up to 15 mm in radius presses like a finger, anything else like a flat.
+* each pair's law follows its contact class, read by the path the handshake's scene takes
+  (`softhand.skin.local_geometry.state_class`): a round skinned geom (capsule, cylinder, sphere,
+  ellipsoid) is a phalanx, a flat one (mesh, box) a palm; a counterpart round up to 15 mm in
+  radius presses like a finger, anything else like a flat; and a finger that lies, at the
+  model's qpos0 or at the ``keyframe`` given, within 5 mm of a mesh palm where its hull is a
+  rounded border presses that border, at its crossing angle (``border/finger``,
+  ``border/finger@60``, ``border/finger@30``). A pair's class is read once, at that state, as
+  the scene reads its pairs' at the grasp: a finger that slides from the face onto the border
+  keeps its first class (the scene's run measures the force that did: its geometry accounting).
   The phalanx pressed by a flat takes the shipped law (the paper's plate); the other classes the
-  skin's law of that class, fitted in closed form to its loading ramp (a finger-sized cylinder
-  on a phalanx carries 0.5-0.8x the plate's force at equal depth); a class the skin has no law of
-  takes the plate law, and the header says so for each pair;
+  skin's law of that class (or of its nearest class the skin has,
+  `softhand.skin.contact_classes.law_class`, as in the scene), fitted in closed form to its
+  loading ramp (a finger-sized cylinder on a phalanx carries 0.5-0.8x the plate's force at equal
+  depth); a class the skin has no law of takes the plate law, and the header says so for each
+  pair;
 * the law is MuJoCo's per contact point: a skinned geom that meets a counterpart in two points
   at once is twice as stiff as the law. MuJoCo's capsule-box and capsule-plane colliders make two
   contacts of a capsule lying flat on a face, and its convex-convex collider (meshes) makes
@@ -60,7 +68,8 @@ import numpy as np
 from softhand import __version__
 from softhand.laws.fit import REFERENCE_FORCE_N
 from softhand.paths import FE_DIR, SKINS_DIR
-from softhand.skin.contact_classes import PLATE_CLASS, classify
+from softhand.skin.contact_classes import PLATE_CLASS, law_class
+from softhand.skin.local_geometry import LocalGeometry, state_class
 from softhand.skin.representations import StockContact, get_representation, loading_ramp
 from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
@@ -151,20 +160,22 @@ def _law(design: str, max_force_N: float | None, skins_dir, fe_dir) -> SoftConta
 
 
 def _class_law(design: str, key: str, max_force_N: float | None, skins_dir
-               ) -> SoftContactParams | None:
-    """The skin's own soft contact for contact class ``key`` (a rigid counterpart): fitted to the
-    loading ramp of the class's law (to ``max_force_N``, default 20 N);
-    None when the skin has no law of that class."""
+               ) -> tuple[str, SoftContactParams] | None:
+    """The skin's own soft contact for contact class ``key`` (a rigid counterpart): (the class
+    whose law it is: ``key``, or the nearest the skin has, `law_class`; the soft contact fitted
+    to the loading ramp of that law, to ``max_force_N``, default 20 N); None when the skin has
+    no law of the class nor of a fallback."""
     from softhand.skin.calibrate import law_curve
     from softhand.skin.files import load_calibration
 
     cal = load_calibration(design, skins_dir)
-    c = cal.pair_laws.get(key)
-    if c is None:
+    key = law_class(key, cal.pair_laws)
+    if key is None:
         return None
+    c = cal.pair_laws[key]
     _, d, f = loading_ramp(law_curve(c.law), max_force_N or MAX_FORCE_RANGE_N[1])
     # one start from the skin's plate soft contact (the multi-start search takes ~20 s)
-    return fit_soft_contact(d, f, initial=cal.soft_contact).params
+    return key, fit_soft_contact(d, f, initial=cal.soft_contact).params
 
 
 def skin_law_error(design: str, law: SoftContactParams, *, top_N: float = REFERENCE_FORCE_N,
@@ -184,7 +195,7 @@ def skin_law_error(design: str, law: SoftContactParams, *, top_N: float = REFERE
 
 def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                against: Sequence[str] | None = None, max_force_N: float | None = None,
-               skins_dir: str | os.PathLike = SKINS_DIR,
+               keyframe: str | None = None, skins_dir: str | os.PathLike = SKINS_DIR,
                fe_dir: str | os.PathLike = FE_DIR) -> list[SkinnedGeom]:
     """Make the named geoms of ``spec`` calibrated skin pads (see the module docstring).
 
@@ -194,6 +205,9 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
         against: the counterpart geoms (default: every collidable geom outside the hand).
         max_force_N: fit each law to its FE loading curve up to this force, in [0.5, 20] N
             (default: the shipped 0-20 N law).
+        keyframe: the name of a keyframe of ``spec`` whose state the pairs' contact classes
+            are read at (default: the model's qpos0): the posture where the hand holds what it
+            touches (the handshake scene's is ``grasp``).
         skins_dir, fe_dir: the calibration (default: the shipped one).
 
     Returns:
@@ -202,7 +216,8 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
 
     Raises:
         ValueError: an unknown geom, design or representation, an unknown counterpart, no
-            counterpart, or ``max_force_N`` out of range: naming the value.
+            counterpart, ``max_force_N`` out of range, or an unknown keyframe: naming the
+            value.
     """
     from softhand.skin.calibrate import skin_names
     from softhand.skin.files import shipped_skins
@@ -216,6 +231,11 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                 and lo <= max_force_N <= hi):
             raise ValueError(f"max_force_N = {max_force_N!r}: expected a number of newtons in "
                              f"[{lo:g}, {hi:g}] (the FE curves reach 20 N)")
+    keys = [k.name for k in spec.keys]
+    if keyframe is not None and keyframe not in keys:
+        raise ValueError(f"keyframe {keyframe!r} is not in the model; "
+                         + (f"it has {', '.join(repr(k) for k in keys)}" if keys else
+                            "it has none (its pairs' classes are read at qpos0 without one)"))
     known = {g.name for g in spec.geoms}
     calibrated = set(shipped_skins(skins_dir))
     for geom, (design, rep) in chosen.items():
@@ -277,9 +297,15 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
     model = spec.compile()
     data = mujoco.MjData(model)  # qpos0, for every pair's mobility
     mujoco.mj_forward(model, data)
+    at = data  # the state the pairs' classes are read at
+    if keyframe is not None:
+        at = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, at, keys.index(keyframe))
+        mujoco.mj_kinematics(model, at)
+    local = LocalGeometry(model)
     out = []
     issues: list[RangeIssue] = []  # one SkinRangeWarning for all the pairs
-    by_class: dict[tuple[str, str], SoftContactParams | None] = {}
+    by_class: dict[tuple[str, str], tuple[str, SoftContactParams] | None] = {}
     for geom, (design, rep) in chosen.items():
         law = laws.get(design) if rep == "soft-contact" else None
         used = {}
@@ -290,18 +316,24 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
             # world geom, a table or a fixed plate, is always pair_geom1)
             skin = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, geom)
             g1, g2 = int(model.pair_geom1[pid]), int(model.pair_geom2[pid])
-            key = classify(model, skin, g2 if g1 == skin else g1)
+            key = state_class(model, at, skin, g2 if g1 == skin else g1, local=local)
             if law is None:  # rigid: MuJoCo's stock contact
                 stock = StockContact()
                 pair.solref, pair.solimp = list(stock.solref), list(stock.solimp)
                 used[name] = f"{key}: stock contact"
                 continue
             this = law  # the plate law: the paper's protocol and every class without a law
+            used[name] = key
             if key != PLATE_CLASS:
                 if (design, key) not in by_class:
                     by_class[(design, key)] = _class_law(design, key, max_force_N, skins_dir)
-                this = by_class[(design, key)] or law
-            used[name] = key if this is not law or key == PLATE_CLASS else f"{key}: plate law"
+                found = by_class[(design, key)]
+                if found is None:
+                    used[name] = f"{key}: plate law"
+                else:
+                    this = found[1]
+                    if found[0] != key:
+                        used[name] = f"{key}: {found[0]} law"
             pair.solref, pair.solimp = pair_law_values(model, name, this, issues=issues,
                                                        data=data)
         out.append(SkinnedGeom(geom, design, rep, law, tuple(made[geom]),

@@ -100,8 +100,8 @@ __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUN
            "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES", "TISSUE_CROSSING_MESH",
            "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_FOLDER", "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL",
            "border_class", "class_crossing", "class_curve", "class_fallback", "class_indenter",
-           "class_parts", "classify", "fit_class_law", "geom_shape", "partner_tissue_class",
-           "shape_ratio", "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
+           "class_parts", "classify", "fit_class_law", "geom_shape", "law_class",
+           "partner_tissue_class", "shape_ratio", "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
            "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
@@ -240,6 +240,17 @@ def class_fallback(key: str) -> str | None:
     if body != "border":
         return None
     return "palm/finger" if crossing == 90.0 else "border/finger"
+
+
+def law_class(key: str, has) -> str | None:
+    """The class whose law a pair of class ``key`` carries, given which classes a skin has laws
+    of (``has``: a container of class keys, e.g. a calibration's ``pair_laws``): ``key`` itself,
+    else its `class_fallback` chain's first that ``has`` holds; None: none (the skin's plate law
+    then). The one rule for the scene (`softhand.envs.skins.pair_choices`) and ``softhand skin
+    apply`` (`softhand.skin.apply.apply_skin`)."""
+    while key is not None and key not in has:
+        key = class_fallback(key)
+    return key
 
 
 def _counterpart(model: mujoco.MjModel, geom: int) -> str:

@@ -42,12 +42,19 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from softhand.skin.contact_classes import FINGER_MAX_RADIUS_MM, class_parts, partner_tissue_class
+from softhand.skin.contact_classes import (
+    FINGER_MAX_RADIUS_MM,
+    border_class,
+    class_parts,
+    classify,
+    partner_tissue_class,
+)
 
-__all__ = ["CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "FINGER_BORDER",
+__all__ = ["BORDER_REACH_M", "CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "FINGER_BORDER",
            "WINDOW_MM", "LocalGeometry",
            "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
-           "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "surface_point"]
+           "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "state_class",
+           "surface_point"]
 
 #: the neighbourhood of a contact point whose hull faces decide face or border (mm)
 WINDOW_MM = 6.0
@@ -65,6 +72,17 @@ FINGER_BORDER = "finger-sized border"
 #: a mesh's shape is read at the centre of the point's cube of this edge in the geom's frame and
 #: kept for that cube (mm): a sixth of `WINDOW_MM`
 CELL_MM = 1.0
+#: a counterpart this close to a palm's skin at the state a pair's class is read at (m; the
+#: handshake's grasp, or a keyframe of `softhand skin apply`) is placed where it is nearest:
+#: the grasp presses the hands 0.5-1.5 mm into each other, and a finger a few millimetres off the
+#: palm there meets it where it is nearest once the grip closes. The fingertips lie 5-14 mm off
+#: the palm at the grasp (default hands) and keep the palm/finger law, though they close onto the
+#: border (12 % of the default run's force). A 30 mm reach gives them the border's law (89 % of
+#: the force through it, seeds 0-2), but the softer fingertips let the palms part 1.4 mm at
+#: mid-shake (the load-path criterion is 1 mm) and the grip of a 216 x 73 mm partner miss its
+#: target by 25 % (95th percentile; criterion 15 %): kept at 5 mm until the fingertips' contact is
+#: understood
+BORDER_REACH_M = 0.005
 
 _CAPSULE = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
 _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
@@ -220,6 +238,33 @@ class LocalGeometry:
         if axis is None:
             return LocalShape(kind, radius, None)
         return LocalShape(kind, radius, data.geom_xmat[geom].reshape(3, 3) @ axis)
+
+
+def state_class(model: mujoco.MjModel, data: mujoco.MjData, skin_geom: int, other_geom: int,
+                *, local: LocalGeometry | None = None) -> str:
+    """The contact class (`softhand.skin.contact_classes.CLASSES`) of a skin geom and the geom
+    that presses it, at the state in ``data`` (its kinematics computed): their types' class
+    (`softhand.skin.contact_classes.classify`), but where that is ``palm/finger`` and, at this
+    state, the two lie within `BORDER_REACH_M` and nearest where the palm's surface is a rounded
+    border (`LocalGeometry`: the hull's normals within `WINDOW_MM` spread over `FACE_DEG`), the
+    border class of the finger's crossing there (`border_class`: ``border/finger`` across or
+    where an axis is missing, ``border/finger@A`` oblique).
+
+    The one path from a pair's geometry to its class: the handshake's scene reads it at the
+    grasp (`softhand.envs.skins.border_pairs`), ``softhand skin apply`` at the model's qpos0 or
+    a keyframe. ``local``: a `LocalGeometry` of ``model`` to reuse (its hulls read once)."""
+    key = classify(model, skin_geom, other_geom)
+    if key != "palm/finger":
+        return key
+    fromto = np.zeros(6)
+    dist = mujoco.mj_geomDistance(model, data, skin_geom, other_geom, BORDER_REACH_M, fromto)
+    if dist >= BORDER_REACH_M:
+        return key
+    local = local or LocalGeometry(model)
+    palm = local.shape(data, skin_geom, fromto[:3])
+    if palm.kind != "border":
+        return key
+    return border_class(crossing_deg(palm, local.shape(data, other_geom, fromto[3:])))
 
 
 def crossing_deg(a: LocalShape, b: LocalShape) -> float | None:
