@@ -114,7 +114,31 @@ def markdown(d: dict) -> str:
         lines.append(f"| {r['seed']} | {'following the crossing' if r['follow'] else 'at the grasp'}"
                      f" | {r['switches']} | {r['within_law_pct']:.1f} | {r['total_Ns']:.1f} | "
                      + " | ".join(f"{r['peak_N'][k]:.2f}" for k in REGIONS) + " |")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n\n" + summary(d) + "\n"
+
+
+def summary(d: dict) -> str:
+    """What the table shows, over its seeds: the border force within its law at the grasp and
+    following the crossing, the switches, and how far the force between the hands and each
+    region's peak move."""
+    grasp = {r["seed"]: r for r in d["runs"] if not r["follow"]}
+    follow = {r["seed"]: r for r in d["runs"] if r["follow"]}
+    seeds = [s for s in grasp if s in follow]
+
+    def span(values, fmt=".0f") -> str:
+        lo, hi = min(values), max(values)
+        return f"{lo:{fmt}}" if f"{lo:{fmt}}" == f"{hi:{fmt}}" else f"{lo:{fmt}}-{hi:{fmt}}"
+
+    total = [100.0 * abs(follow[s]["total_Ns"] / grasp[s]["total_Ns"] - 1.0) for s in seeds]
+    moves = [(100.0 * (follow[s]["peak_N"][k] / grasp[s]["peak_N"][k] - 1.0), k, s)
+             for s in seeds for k in REGIONS if grasp[s]["peak_N"][k] > 0.0]
+    worst = max(moves, key=lambda m: abs(m[0]))
+    return (f"Over seeds {', '.join(map(str, seeds))}: the border pairs' force within its law "
+            f"{span([grasp[s]['within_law_pct'] for s in seeds])} % at the grasp, "
+            f"{span([follow[s]['within_law_pct'] for s in seeds])} % following the crossing "
+            f"({span([follow[s]['switches'] for s in seeds])} switches an episode); the force "
+            f"between the hands moves by {span(total, '.1f')} %, the regions' peaks by up to "
+            f"{worst[0]:+.0f} % ({worst[1]} at seed {worst[2]}).")
 
 
 def main() -> None:
