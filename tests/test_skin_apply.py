@@ -440,3 +440,32 @@ def test_skin_apply_at_the_scene_s_grasp_gives_each_pair_the_scene_s_class():
     spec = mujoco.MjSpec.from_file(str(xml))
     (skin,) = apply_skin(spec, {"pro_skin_Palm": "pocket2-sil"}, against=list(palm))
     assert not any(k.startswith("border") for k in skin.pair_laws.values())
+
+
+def test_a_skin_without_a_border_law_takes_the_scene_s_fallback_and_says_so(tmp_path):
+    """A skin with no border laws (a design search's winner has none): its border pairs take the
+    law the scene would give them (`softhand.skin.contact_classes.law_class`: the palm face's),
+    and the written file's header names the class and the law it took instead."""
+    import json
+
+    from softhand.envs.skins import GRASP_KEY
+    from softhand.paths import SKINS_DIR
+
+    cal = json.loads((SKINS_DIR / "pocket2-sil.json").read_text())
+    cal["pair_laws"] = {k: v for k, v in cal["pair_laws"].items() if not k.startswith("border")}
+    skins = tmp_path / "skins"
+    skins.mkdir()
+    (skins / "pocket2-sil.json").write_text(json.dumps(cal))
+    xml = Path(__file__).resolve().parents[1] / "models" / "mjcf" / "handshake_scene.xml"
+    spec = mujoco.MjSpec.from_file(str(xml))
+    against = ["hum_tissue_index_proximal", "hum_tissue_little_proximal", "hum_tissue_palm"]
+    (skin,) = apply_skin(spec, {"pro_skin_Palm": "pocket2-sil"}, against=against,
+                         keyframe=GRASP_KEY, skins_dir=skins)
+    laws = {name.removeprefix("skin_pro_skin_Palm__"): law for name, law in skin.pair_laws.items()}
+    assert laws["hum_tissue_index_proximal"] == "border/finger@60: palm/finger law"
+    assert laws["hum_tissue_little_proximal"] == "border/finger@30: palm/finger law"
+    assert laws["hum_tissue_palm"] == "palm/flat"
+    written = write_skinned(spec, [skin], xml, tmp_path / "out.xml")
+    text = written.path.read_text()
+    assert "pocket2-sil soft contact, border/finger@60: palm/finger law" in text
+    assert "law law" not in text

@@ -87,7 +87,7 @@ def _crossing_drift() -> list[dict]:
     import mujoco
 
     from softhand.envs.handshake import HandshakeEnv
-    from softhand.envs.skins import _skin_first, border_crossings
+    from softhand.envs.skins import _skin_first
     from softhand.hands.grasp import set_grasp_state, solve_grasp
     from softhand.skin.contact_classes import class_crossing
 
@@ -111,7 +111,12 @@ def _crossing_drift() -> list[dict]:
         run_module.ContactAreas._classify = original
     d = mujoco.MjData(m)
     set_grasp_state(m, d, solve_grasp(env.config))
-    at_grasp = border_crossings(m, d)  # what the pairs' laws were chosen from
+    local = lg.LocalGeometry(m)
+    at_grasp = {}  # the crossings the pairs' laws were chosen from
+    for pid in range(m.npair):
+        on = lg.border_contact(m, d, *_skin_first(m, pid), local=local)
+        if on is not None:
+            at_grasp[m.pair(pid).name] = lg.crossing_deg(*on)
     rows = []
     for pid in range(m.npair):
         name = m.pair(pid).name

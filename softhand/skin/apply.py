@@ -499,8 +499,9 @@ def skinned_text(spec: mujoco.MjSpec, skinned: list[SkinnedGeom], source: str | 
             lines.append(f'<pair name="{name}" geom1="{p.geomname1}" geom2="{p.geomname2}" '
                          f'condim="{p.condim}" friction="{_numbers(p.friction)}" '
                          f'solref="{_numbers(p.solref)}" solimp="{_numbers(p.solimp)}"/>')
-            law = ("MuJoCo's stock contact" if s.law is None
-                   else f"{s.design} soft contact, {s.pair_laws.get(name, '')} law")
+            used = s.pair_laws.get(name, "")  # "class", or "class: the law it took instead"
+            law = ("MuJoCo's stock contact" if s.law is None else
+                   f"{s.design} soft contact, {used}" + ("" if ":" in used else " law"))
             changes.append(ModelChange(f'<pair name="{name}">',
                                        f"added: {p.geomname1} against {p.geomname2}, {law}"))
     contacts = [c for c in editor.root.children if c.tag == "contact"]

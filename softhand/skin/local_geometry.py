@@ -52,7 +52,7 @@ from softhand.skin.contact_classes import (
 
 __all__ = ["BORDER_REACH_M", "CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "FINGER_BORDER",
            "WINDOW_MM", "LocalGeometry",
-           "LocalShape", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
+           "LocalShape", "border_contact", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
            "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "state_class",
            "surface_point"]
 
@@ -240,31 +240,44 @@ class LocalGeometry:
         return LocalShape(kind, radius, data.geom_xmat[geom].reshape(3, 3) @ axis)
 
 
-def state_class(model: mujoco.MjModel, data: mujoco.MjData, skin_geom: int, other_geom: int,
-                *, local: LocalGeometry | None = None) -> str:
-    """The contact class (`softhand.skin.contact_classes.CLASSES`) of a skin geom and the geom
-    that presses it, at the state in ``data`` (its kinematics computed): their types' class
-    (`softhand.skin.contact_classes.classify`), but where that is ``palm/finger`` and, at this
-    state, the two lie within `BORDER_REACH_M` and nearest where the palm's surface is a rounded
-    border (`LocalGeometry`: the hull's normals within `WINDOW_MM` spread over `FACE_DEG`), the
-    border class of the finger's crossing there (`border_class`: ``border/finger`` across or
-    where an axis is missing, ``border/finger@A`` oblique).
-
-    The one path from a pair's geometry to its class: the handshake's scene reads it at the
-    grasp (`softhand.envs.skins.border_pairs`), ``softhand skin apply`` at the model's qpos0 or
-    a keyframe. ``local``: a `LocalGeometry` of ``model`` to reuse (its hulls read once)."""
-    key = classify(model, skin_geom, other_geom)
-    if key != "palm/finger":
-        return key
+def border_contact(model: mujoco.MjModel, data: mujoco.MjData, skin_geom: int, other_geom: int,
+                   *, local: LocalGeometry | None = None
+                   ) -> tuple[LocalShape, LocalShape] | None:
+    """Where a skin geom of class ``palm/finger`` (`softhand.skin.contact_classes.classify`)
+    and its finger lie, at the state in ``data`` (its kinematics computed), within
+    `BORDER_REACH_M` and nearest where the palm's surface is a rounded border (`LocalGeometry`:
+    the hull's normals within `WINDOW_MM` spread over `FACE_DEG`): (the palm's shape there, the
+    finger's at its nearest point; their `crossing_deg` is the crossing); None for any other
+    pair or state. ``local``: a `LocalGeometry` of ``model`` to reuse (its hulls read once)."""
+    if classify(model, skin_geom, other_geom) != "palm/finger":
+        return None
     fromto = np.zeros(6)
     dist = mujoco.mj_geomDistance(model, data, skin_geom, other_geom, BORDER_REACH_M, fromto)
     if dist >= BORDER_REACH_M:
-        return key
+        return None
     local = local or LocalGeometry(model)
     palm = local.shape(data, skin_geom, fromto[:3])
     if palm.kind != "border":
-        return key
-    return border_class(crossing_deg(palm, local.shape(data, other_geom, fromto[3:])))
+        return None
+    return palm, local.shape(data, other_geom, fromto[3:])
+
+
+def state_class(model: mujoco.MjModel, data: mujoco.MjData, skin_geom: int, other_geom: int,
+                *, local: LocalGeometry | None = None) -> str:
+    """The contact class (`softhand.skin.contact_classes.CLASSES`) of a skin geom and the geom
+    that presses it, at the state in ``data``: their types' class
+    (`softhand.skin.contact_classes.classify`), but where the finger lies on the palm's rounded
+    border at this state (`border_contact`), the border class of its crossing there
+    (`border_class`: ``border/finger`` across or where an axis is missing, ``border/finger@A``
+    oblique).
+
+    The one path from a pair's geometry to its class: the handshake's scene reads it at the
+    grasp (`softhand.envs.skins.border_pairs`), ``softhand skin apply`` at the model's qpos0 or
+    a keyframe. ``local``: a `LocalGeometry` of ``model`` to reuse."""
+    on = border_contact(model, data, skin_geom, other_geom, local=local)
+    if on is None:
+        return classify(model, skin_geom, other_geom)
+    return border_class(crossing_deg(*on))
 
 
 def crossing_deg(a: LocalShape, b: LocalShape) -> float | None:
