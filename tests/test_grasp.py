@@ -196,26 +196,28 @@ def test_a_cached_grasp_is_the_solved_one_and_keyed_by_its_config(tmp_path, monk
 @pytest.mark.slow
 def test_the_grasp_has_one_answer_whichever_solver_finds_it(monkeypatch):
     """The grasp is the cheapest of the solver's starts, then hops to any cheaper minimum nearby:
-    its cost is at most the cheapest start's. For a 174 x 101 mm partner the starts alone left
-    two answers 10.5 deg and 6 mm apart when the palms' parallelism weighed 0.02 (the analytic
-    Jacobian's cheapest start and finite differences', 1.9 % apart in cost; the hops found the
-    cheaper one); finite differences (another solver of the same definition) land within the
-    issue's 2 deg and 2 mm of the grasp."""
+    its cost is at most the cheapest start's. For a 161 x 88 mm partner (of the 30-partner
+    population, seed 0) finite differences (another solver of the same definition) stopped
+    40 deg (ring PIP) and 16 mm from the grasp, in a minimum 23 % dearer, until every other hop
+    moved one digit alone; with them, finite differences and other hop seeds (2 and 3) land
+    within the issue's 2 deg and 2 mm of the grasp (measured 0.0 deg; over the population and
+    the +-2.5 SD corners: reports/grasp-agreement.md)."""
     from softhand.hands.grasp import _Problem, _solve_grasp, _solve_starts, _start_runs
 
     monkeypatch.setenv("SOFTHAND_CACHE_DIR", "off")
     config = SceneConfig(partner=PartnerConfig(hand=HandConfig(
-        hand_length_m=0.17419935230862254, hand_width_m=0.10135770156448491)))
+        hand_length_m=0.16106440009235646, hand_width_m=0.0880422166852587)))
     grasp = _solve_grasp.__wrapped__(config, GRASP_SETTINGS)
     problem = _Problem(config, GRASP_SETTINGS)
     costs = [cost for cost, _, _ in _start_runs(problem, GRASP_SETTINGS)]
     assert grasp.cost <= min(costs)
-    _, x_fd, _ = _solve_starts(problem, GRASP_SETTINGS, finite_differences=True)
-    joints = np.degrees(np.abs(x_fd[6:] - np.concatenate([grasp.partner_q,
-                                                          grasp.prosthetic_q])).max())
-    pos, _ = problem.pose(x_fd)
-    assert joints < 2.0, f"largest joint difference {joints:.2f} deg"
-    assert 1e3 * np.linalg.norm(pos - grasp.partner_pos_m) < 2.0
+    for how in ({"finite_differences": True}, {"seeds": (2, 3)}):
+        _, x, _ = _solve_starts(problem, GRASP_SETTINGS, **how)
+        joints = np.degrees(np.abs(x[6:] - np.concatenate([grasp.partner_q,
+                                                            grasp.prosthetic_q])).max())
+        pos, _ = problem.pose(x)
+        assert joints < 2.0, f"{how}: largest joint difference {joints:.2f} deg"
+        assert 1e3 * np.linalg.norm(pos - grasp.partner_pos_m) < 2.0, how
 
 
 @pytest.mark.slow

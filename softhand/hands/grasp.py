@@ -42,11 +42,11 @@ on the near side of what it would pass through: the thumbs stay over the other h
 Both stages run from each of five starts, and the grasp is the cheapest (`_solve_starts`): the
 targets leave local minima (a finger on one side of a neighbour or the other), and the first
 start that met the acceptance could be 20 % dearer and 38 deg away from the cheapest. From the
-cheapest start the solver hops to cheaper minima nearby (`_hop`), in two searches of their own
-seeds (_HOP_SEEDS), and keeps the cheaper: with the starts alone, finite differences found
-another minimum 2-10 deg away on 9 of 34 pairs of hands; with the hops the two solvers, and
-other hop seeds, agree on most pairs but not yet all (reports/grasp-agreement.md lists the
-rest).
+cheapest start the solver hops to cheaper minima nearby (`_hop`: every other hop moves one digit
+alone, the others the whole problem), in two searches of their own seeds (_HOP_SEEDS), and
+keeps the cheaper: with the starts alone, finite differences found another minimum 2-10 deg
+away on 9 of 34 pairs of hands; reports/grasp-agreement.md says how far the two solvers, and
+other hop seeds, now lie apart.
 
 Variables: the partner hand frame's pose relative to the prosthetic hand frame (position, and a
 rotation vector about the starting orientation), the partner's 16 digit joints (wrist at 0), the
@@ -176,11 +176,24 @@ _MU_FACTOR = 10.0 ** 0.5
 #: further apart: one search (seed 0) left two partners near the experimenter's size
 #: (190 x 92 and 190 x 97 mm) in minima 45-56 % dearer and 43-57 deg from the one that finite
 #: differences and seed 1 both found (reports/grasp-agreement.md).
+#: Every other hop moves one digit alone (`_Problem.digits`: a partner digit's joints, or a
+#: prosthetic digit's motors), each of its joints by a normal draw of the next of
+#: _HOP_DIGIT_RAD in turn: the minima that whole-hand hops could not reach differ in one finger
+#: (a 161 x 88 mm partner's ring PIP 40 deg apart, 23 % in cost: finite differences stayed there
+#: through 24 whole-hand hops in a row), and the near ties a few degrees apart (204 x 81 and
+#: 199 x 85 mm: 2.2-2.5 deg between hop seeds, within 0.03 % in cost) are one finger's posture
+#: on either side of a kink (the palms' press is a distance between polyhedra, piecewise in the
+#: pose, and the solver stops where it bends). With one width (0.5 rad) and a patience of 24,
+#: finite differences and other seeds agreed within 2 deg on 32 of 34 pairs of hands (the
+#: 216 x 73 mm corner's seeds 2 and 3 stayed at its cheapest start, 10 % dearer; a 201 x 73 mm
+#: partner's finite differences 2.1 deg away); a narrower width beside it (0.1 rad) and a
+#: patience of 36 (18 hops of each kind) reach both.
 _HOP_SEEDS = (0, 1)
 _HOP_POS_M = 0.002
 _HOP_TURN_RAD = 0.03
 _HOP_JOINT_RAD = 0.08
-_HOP_PATIENCE = 24
+_HOP_DIGIT_RAD = (0.5, 0.1)
+_HOP_PATIENCE = 36
 _HOP_MAX = 90
 _HOP_TIERS = (1.0, 3.0, 6.0)
 _HOP_GAIN = 1e-6
@@ -316,6 +329,13 @@ class _Problem:
             [0.7, 0.7, 0.7, 0.7, 0.4, 0.3]])
         self.prior = np.clip(self.prior, *self.bounds)
         self.n = 6 + n_hum + n_pro
+        # each digit's variables (the partner's joints of a digit, the prosthetic's motors of
+        # one), in the order they first appear: the digit hops' moves (`_hop`)
+        groups: dict[tuple[str, str], list[int]] = {}
+        for i, (hand, j) in enumerate([*(("hum", j) for j in PARTNER_JOINTS),
+                                       *(("pro", j) for j in PROSTHETIC_MOTOR_JOINTS)]):
+            groups.setdefault((hand, j.split("_")[0]), []).append(6 + i)
+        self.digits = [np.array(v) for v in groups.values()]
         self.geom_body = m.geom_bodyid.copy()
         self.arm_dof = int(m.jnt_dofadr[m.joint("hum_arm").id])
         self.dq_dx = self._joint_dofs()
@@ -789,7 +809,8 @@ def _solve_starts(problem: _Problem, settings: GraspSettings, *,
 def _hop(problem: _Problem, settings: GraspSettings, best: tuple[float, np.ndarray, list[int]],
          *, seed: int, finite_differences: bool = False,
          ) -> tuple[float, np.ndarray, list[int]]:
-    """From the cheapest start, hops to cheaper minima nearby (the constants' comment): (cost,
+    """From the cheapest start, hops to cheaper minima nearby (the constants' comment): odd
+    hops move one digit, even ones the whole problem by the next of _HOP_TIERS; (cost,
     variables, iterations per stage: the starts' two, then the last kept hop's)."""
     rng = np.random.default_rng(seed)
     scale = np.concatenate([np.full(3, _HOP_POS_M), np.full(3, _HOP_TURN_RAD),
@@ -798,8 +819,15 @@ def _hop(problem: _Problem, settings: GraspSettings, best: tuple[float, np.ndarr
     fails = hops = 0
     while fails < _HOP_PATIENCE and hops < _HOP_MAX:
         hops += 1
-        wide = _HOP_TIERS[hops % len(_HOP_TIERS)]
-        x0 = np.clip(x + wide * scale * rng.standard_normal(problem.n), *problem.bounds)
+        if hops % 2:
+            digit = problem.digits[int(rng.integers(len(problem.digits)))]
+            x0 = x.copy()
+            wide = _HOP_DIGIT_RAD[(hops // 2) % len(_HOP_DIGIT_RAD)]
+            x0[digit] += wide * rng.standard_normal(len(digit))
+            x0 = np.clip(x0, *problem.bounds)
+        else:
+            wide = _HOP_TIERS[(hops // 2) % len(_HOP_TIERS)]
+            x0 = np.clip(x + wide * scale * rng.standard_normal(problem.n), *problem.bounds)
         y, trace = _solve(problem, x0, True, settings.max_iter,
                           finite_differences=finite_differences)
         c = 0.5 * float(np.sum(problem.residual(y, contacts=True) ** 2))
