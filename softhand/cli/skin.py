@@ -52,7 +52,13 @@ def skin_apply(hand, out, geom_items, against, max_force, keyframe, as_json) -> 
     here and in a comment at its top; the output loads in plain MuJoCo."""
     import mujoco
 
-    from softhand.skin.apply import apply_skin, check_skinnable, parse_geom_skins, write_skinned
+    from softhand.skin.apply import (
+        apply_skin,
+        check_keyframe,
+        check_skinnable,
+        parse_geom_skins,
+        write_skinned,
+    )
     from softhand.skin.apply import skin_law_error as law_error
 
     source = Path(hand)
@@ -70,10 +76,10 @@ def skin_apply(hand, out, geom_items, against, max_force, keyframe, as_json) -> 
         spec.compile()
     except ValueError as exc:
         bad(f"HAND {hand!r} does not load in MuJoCo: {str(exc).splitlines()[0]}")
-    keys = [k.name for k in spec.keys]
-    if keyframe is not None and keyframe not in keys:
-        bad(f"--keyframe {keyframe!r}: HAND {hand!r} has "
-            + (f"the keyframes {', '.join(repr(k) for k in keys)}" if keys else "no keyframe"))
+    try:
+        check_keyframe(spec, keyframe)
+    except ValueError as exc:
+        bad(f"--{exc}")
     known = {g.name for g in spec.geoms}
     try:
         check_skinnable(source, [g for g in geoms if g in known])

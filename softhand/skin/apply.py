@@ -75,8 +75,8 @@ from softhand.skin.rig import RangeIssue, pair_law_values, warn_range_issues
 from softhand.skin.soft_contact import SoftContactParams, fit_soft_contact
 
 __all__ = ["APPLY_REPRESENTATIONS", "ModelChange", "SkinnedFile", "SkinnedGeom", "apply_skin",
-           "check_skinnable", "parse_geom_skins", "skin_law_error", "skinned_text",
-           "write_skinned"]
+           "check_keyframe", "check_skinnable", "parse_geom_skins", "skin_law_error",
+           "skinned_text", "write_skinned"]
 
 #: the representations skin apply writes (the others need a body per pad, or are rig-only)
 APPLY_REPRESENTATIONS = ("soft-contact", "rigid")
@@ -193,6 +193,19 @@ def skin_law_error(design: str, law: SoftContactParams, *, top_N: float = REFERE
     return float(100 * np.sqrt(np.mean((law.force(d) - f) ** 2)) / REFERENCE_FORCE_N)
 
 
+def check_keyframe(spec: mujoco.MjSpec, keyframe: str | None) -> int | None:
+    """The index of keyframe ``keyframe`` of ``spec`` (None for None); ValueError naming it and
+    the model's keyframes when it has no such keyframe."""
+    if keyframe is None:
+        return None
+    keys = [k.name for k in spec.keys]
+    if keyframe not in keys:
+        raise ValueError(f"keyframe {keyframe!r}: the model has "
+                         + (f"the keyframes {', '.join(repr(k) for k in keys)}" if keys else
+                            "no keyframe (its pairs' classes are read at qpos0 without one)"))
+    return keys.index(keyframe)
+
+
 def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                against: Sequence[str] | None = None, max_force_N: float | None = None,
                keyframe: str | None = None, skins_dir: str | os.PathLike = SKINS_DIR,
@@ -231,11 +244,7 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
                 and lo <= max_force_N <= hi):
             raise ValueError(f"max_force_N = {max_force_N!r}: expected a number of newtons in "
                              f"[{lo:g}, {hi:g}] (the FE curves reach 20 N)")
-    keys = [k.name for k in spec.keys]
-    if keyframe is not None and keyframe not in keys:
-        raise ValueError(f"keyframe {keyframe!r} is not in the model; "
-                         + (f"it has {', '.join(repr(k) for k in keys)}" if keys else
-                            "it has none (its pairs' classes are read at qpos0 without one)"))
+    check_keyframe(spec, keyframe)
     known = {g.name for g in spec.geoms}
     calibrated = set(shipped_skins(skins_dir))
     for geom, (design, rep) in chosen.items():
@@ -300,7 +309,7 @@ def apply_skin(spec: mujoco.MjSpec, geoms: Mapping[str, str] | Sequence[str], *,
     at = data  # the state the pairs' classes are read at
     if keyframe is not None:
         at = mujoco.MjData(model)
-        mujoco.mj_resetDataKeyframe(model, at, keys.index(keyframe))
+        mujoco.mj_resetDataKeyframe(model, at, check_keyframe(spec, keyframe))
         mujoco.mj_kinematics(model, at)
     local = LocalGeometry(model)
     out = []

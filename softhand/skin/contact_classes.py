@@ -95,13 +95,14 @@ import numpy as np
 from softhand.laws.elastic import ElasticLaw
 from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 
-__all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS", "FE_BODY",
-           "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS", "PLATE_CLASS",
-           "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES", "TISSUE_CROSSING_MESH",
-           "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_FOLDER", "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL",
-           "border_class", "class_crossing", "class_curve", "class_fallback", "class_indenter",
-           "class_parts", "classify", "fit_class_law", "geom_shape", "law_class",
-           "partner_tissue_class", "shape_ratio", "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
+__all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS",
+           "FE_BODY", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS",
+           "PLATE_CLASS", "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES",
+           "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_FOLDER",
+           "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing",
+           "class_curve", "class_fallback", "class_indenter", "class_parts", "classify",
+           "fit_class_law", "geom_shape", "law_class", "partner_tissue_class", "shape_ratio",
+           "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
            "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")

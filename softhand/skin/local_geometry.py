@@ -50,11 +50,10 @@ from softhand.skin.contact_classes import (
     partner_tissue_class,
 )
 
-__all__ = ["BORDER_REACH_M", "CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG", "FINGER_BORDER",
-           "WINDOW_MM", "LocalGeometry",
-           "LocalShape", "border_contact", "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting",
-           "law_classes", "law_fits", "pair_class", "palm_border_share_pct", "state_class",
-           "surface_point"]
+__all__ = ["BORDER_REACH_M", "CELL_MM", "CROSSING_BIN_DEG", "CROSSING_TOLERANCE_DEG", "FACE_DEG",
+           "FINGER_BORDER", "WINDOW_MM", "LocalGeometry", "LocalShape", "border_contact",
+           "contact_class", "crossing_bin", "crossing_deg", "geometry_accounting", "law_classes",
+           "law_fits", "pair_class", "palm_border_share_pct", "state_class", "surface_point"]
 
 #: the neighbourhood of a contact point whose hull faces decide face or border (mm)
 WINDOW_MM = 6.0
