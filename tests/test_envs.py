@@ -142,20 +142,35 @@ def test_default_timestep_reproduces_half_a_millisecond(controller):
     assert sum(v["mean_N"] for v in coarse.values()) == pytest.approx(total, rel=0.08)
 
 
-@pytest.mark.parametrize("controller", ["neutral", "open-loop", "force"])
-@pytest.mark.slow
-def test_one_and_two_milliseconds_agree_within_5_percent_on_every_region_over_1_n(controller):
-    """Issue 35, item 7: 2 ms against 1 ms, same partner and controller, every region whose peak
-    passes 1 N: its peak and its mean within 5 % (measured, seeds 0-3: worst peak 4.3 %, Palm1's
-    grip transient; worst mean 3.9 %). Before the clock's slack (partner.CLOCK_SLACK_S) the
-    open-loop close took one action more at 1 ms and its middle phalanges were 8-10 % apart."""
-    fine = run_handshake(controller=controller, seed=0, timestep_s=0.001).table()
-    coarse = run_handshake(controller=controller, seed=0, timestep_s=0.002).table()
+def _one_and_two_milliseconds_agree(controller: str, seed: int) -> None:
+    fine = run_handshake(controller=controller, seed=seed, timestep_s=0.001).table()
+    coarse = run_handshake(controller=controller, seed=seed, timestep_s=0.002).table()
     loaded = [r for r, v in fine.items() if v["peak_N"] > 1.0]
     assert loaded
     for r in loaded:
         for what in ("peak_N", "mean_N"):
             assert coarse[r][what] == pytest.approx(fine[r][what], rel=0.05), (r, what)
+
+
+@pytest.mark.parametrize("controller", ["neutral", "open-loop", "force"])
+@pytest.mark.slow
+def test_one_and_two_milliseconds_agree_within_5_percent_on_every_region_over_1_n(controller):
+    """Issue 35, item 7: 2 ms against 1 ms, same partner and controller (seed 0), every region
+    whose peak passes 1 N: its peak and its mean within 5 % (measured: worst peak 4.6 %, Palm1's
+    grip transient, neutral). Before the clock's slack (partner.CLOCK_SLACK_S) the
+    open-loop close took one action more at 1 ms and its middle phalanges were 8-10 % apart."""
+    _one_and_two_milliseconds_agree(controller, seed=0)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "issue 35, item 7: at seed 1 Back1's grip transient peaks at 8.96 N at 2 ms against 7.28 N "
+    "at 1 and 0.5 ms (23 %; reports/bench-handshake.md, worst of seeds 0-3)"))
+def test_one_and_two_milliseconds_agree_at_seed_1():
+    """The same bar at seed 1, where 2 ms overshoots the grip's transient on Back1 (the mean
+    stays within 2 %). Expected to fail until the transient is integrated as 1 ms does (strict:
+    it fails the suite once it passes, so that the mark comes off)."""
+    _one_and_two_milliseconds_agree("neutral", seed=1)
 
 
 def test_open_loop_closes_for_the_same_number_of_actions_at_every_timestep():
