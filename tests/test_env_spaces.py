@@ -164,7 +164,7 @@ import gymnasium as gym
 from gymnasium.wrappers import RenderCollection
 
 import softhand.envs  # noqa: F401
-from softhand.envs.picture import RENDER_VIEW
+from softhand.envs.picture import RENDER_VIEW, skin_forces
 from softhand.viz.render import render_state
 
 warnings.simplefilter("ignore")
@@ -185,7 +185,9 @@ assert len({tuple(p) for p in picture.reshape(-1, 3)[::97]}) > 20  # a picture, 
 base = env.unwrapped
 d = base.data
 path = sys.argv[1]
-forces = {g: info["region_forces_N"][r] for g, r in zip(base.region_geoms, base.region_names)}
+# skin geom -> force as the env colours it: a skin of several zones (the palm) by its largest
+forces = skin_forces(base.model, base.region_names,
+                     [info["region_forces_N"][r] for r in base.region_names])
 assert max(forces.values()) > 0.0  # the skin is coloured by a force
 render_state(base.model, d.qpos, d.mocap_pos, d.mocap_quat, path, width=320, height=240,
              view=RENDER_VIEW, region_force_N=forces)
