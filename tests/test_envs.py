@@ -171,10 +171,9 @@ def test_one_and_two_milliseconds_agree_at_seed_1():
     """The same bar at seed 1, where at the grip's peak (1.04 s) the partner's index middle
     phalanx presses the palm's proximal end (its flat wrist-crease face) with 3.1-3.3 N at both
     timesteps, at the edge of Back1's zone (the palm's mid-plane): 3.5 mm outside it at 1 ms,
-    1.8 mm inside at 2 ms, so
-    Back1 reads it at 2 ms only (the mean within 2 %). Expected to fail until a region's reading
-    does not step at a zone's edge, or the contact lies where both timesteps put it (strict: it
-    fails the suite once it passes, so that the mark comes off)."""
+    1.8 mm inside at 2 ms, so Back1 reads it at 2 ms only (the mean within 2 %). Expected to
+    fail until a region's reading does not step at a zone's edge, or the contact lies where both
+    timesteps put it (strict: it fails the suite once it passes, so that the mark comes off)."""
     _one_and_two_milliseconds_agree("neutral", seed=1)
 
 
