@@ -14,11 +14,13 @@ from softhand.laws.qlv import Prony
 from softhand.laws.references import HUMAN, reference_law
 from softhand.skin.contact_classes import (
     CLASSES,
+    TISSUE_FE_CONFIRM,
     classify,
     geom_shape,
     partner_tissue_class,
     shape_ratio,
     tissue_class_data_range,
+    tissue_class_depths,
     tissue_class_law,
     tissue_counterpart,
 )
@@ -150,33 +152,74 @@ def test_a_tissue_crossing_law_is_the_finger_law_times_the_long_phalanx_s_crossi
 
 def test_a_tissue_class_law_is_calibrated_to_where_the_tissue_s_data_end():
     """The tissue's data (the plate's, to 7 N) end at a depth; a class law of ratio 0.6 there
-    is calibrated to 0.6 x 7 N, not 7 N; no deeper than both FE ramps reach; the plate class to
-    the data's own force. The shipped pair laws carry these ranges: where a prosthetic phalanx
-    or border presses the partner (the tissue's finger class, 0.69 x 7 = 4.8 N), where a palm
-    face does (its plate class, 7 N), where a border crosses the partner's phalanx obliquely
-    (its crossing class, stiffer: further)."""
-    from softhand.skin.files import load_calibration
-
+    rests on them to 0.6 x 7 N, not 7 N; no deeper than both FE ramps reach; the plate class to
+    the data's own force. Beyond, a class law rests on its class's FE as far as that FE runs and
+    follows it (the law's depth at the FE's force within TISSUE_FE_CONFIRM): a class FE that
+    follows the law to 8 mm carries its range there, one that stiffens less stops it where
+    the two part by 5 % in depth, and a plate FE that reaches past the data does not move the
+    plate class's range."""
     tissue = reference_law(HUMAN)
     d = np.linspace(0.0, 8.0, 200)
-    plate = Curve(d / 0.5, d, 0.2 * d ** 2, np.zeros(d.size, bool), label="plate")
-    finger = Curve(d / 0.5, d, 0.12 * d ** 2, np.zeros(d.size, bool), label="finger")
+    law_plate = tissue.elastic.force(d)  # a plate FE that follows the tissue's law exactly,
+    n = int(np.searchsorted(d, 6.4))  # and stops (its top elements invert) just past the data
+    plate = Curve(d[:n] / 0.5, d[:n], law_plate[:n], np.zeros(n, bool), label="plate")
+    finger = Curve(d / 0.5, d, 0.6 * law_plate, np.zeros(d.size, bool), label="finger")
     law = tissue_class_law(tissue, "phalanx/finger", plate, finger)
+    data_mm, fe_mm, worst = tissue_class_depths(tissue, "phalanx/finger", law, plate, finger)
+    assert data_mm == pytest.approx(float(tissue.elastic.displacement_at(7.0)))
+    assert float(law.elastic.force(data_mm)) == pytest.approx(0.6 * 7.0, rel=0.02)
+    assert fe_mm == pytest.approx(8.0) and worst < 0.01  # the FE follows it to its end
     assert tissue_class_data_range(tissue, "phalanx/finger", law, plate, finger) == pytest.approx(
-        0.6 * 7.0, rel=0.02)
+        float(law.elastic.force(8.0)))
+    # an FE that stiffens less than the law beyond the data: the range stops where they part
+    soft = Curve(d / 0.5, d, 0.6 * np.minimum(law_plate, 7.0 + 2.0 * np.maximum(d - data_mm, 0)),
+                 np.zeros(d.size, bool), label="finger, softer beyond the data")
+    law = tissue_class_law(tissue, "phalanx/finger", plate, soft)
+    _, fe_mm, worst = tissue_class_depths(tissue, "phalanx/finger", law, plate, soft)
+    assert data_mm < fe_mm < 8.0 and worst <= TISSUE_FE_CONFIRM
+    nxt = fe_mm + (8.0 - data_mm) / 59  # the next depth of the check's grid
+    f_next = float(np.interp(nxt, d, soft.force_N))
+    assert abs(float(law.elastic.displacement_at(f_next)) - nxt) > TISSUE_FE_CONFIRM * nxt
+    assert tissue_class_data_range(tissue, "phalanx/flat", tissue, plate, plate) == (
+        pytest.approx(7.0))
     assert tissue_class_data_range(tissue, "phalanx/flat", tissue) == pytest.approx(7.0)
-    short = Curve(d[:80] / 0.5, d[:80], 0.12 * d[:80] ** 2, np.zeros(80, bool), label="short")
+    short = Curve(d[:80] / 0.5, d[:80], 0.6 * law_plate[:80], np.zeros(80, bool), label="short")
     depth = short.displacement_mm[-1]  # 3.2 mm, short of the data's 6.2 mm
     law = tissue_class_law(tissue, "phalanx/finger", plate, short)
     assert tissue_class_data_range(tissue, "phalanx/finger", law, plate, short) == pytest.approx(
         float(law.elastic.force(depth)))
+
+
+def test_the_shipped_pair_laws_carry_the_tissue_s_ranges():
+    """The shipped pair laws carry the ranges `tissue_class_data_range` gives on the shipped
+    tissue FE: where a prosthetic phalanx or border presses the partner (the tissue's finger
+    class: 4.8 N of data, 8.1 N with its FE), where a palm face does (its plate class, 7 N),
+    where a border crosses the partner's phalanx at 30 deg (its crossing class: 8.7 N of data,
+    11.6 N with its FE; the partner's thenar on the sensored palm's radial border peaks at
+    8.4-10.9 N in the default run at seeds 0-4)."""
+    from pathlib import Path
+
+    from softhand.skin.calibrate import tissue_curves
+    from softhand.skin.contact_classes import tissue_class_curves
+    from softhand.skin.files import load_calibration
+
+    tissue = reference_law(HUMAN)
+    curves = tissue_curves(Path(__file__).resolve().parent.parent / "calibration" / "fe")
+    want = {}
+    for key in ("phalanx/finger", "phalanx/finger@30", "phalanx/finger@60"):
+        found = tissue_class_curves(key, curves)
+        law = tissue_class_law(tissue, key, *found)
+        want[key] = tissue_class_data_range(tissue, key, law, found[0], found[1],
+                                            cross=found[2])
     cal = load_calibration("pocket2-sil")
     tops = {k: c.pair.calibrated_max_N for k, c in cal.pair_laws.items()}
     assert tops["palm/flat"] == tops["palm/finger"] == pytest.approx(7.0)  # tissue: a flat's
     for key in ("phalanx/flat", "phalanx/finger", "border/finger"):  # tissue: a finger's
-        assert tops[key] == pytest.approx(4.8, abs=0.1), key
-    # an oblique border crosses the partner's phalanx: its tissue crossing's, further
-    assert tops["border/finger@30"] > tops["border/finger@60"] > tops["border/finger"] + 0.5
+        assert tops[key] == pytest.approx(want["phalanx/finger"]), key
+    assert tops["border/finger@30"] == pytest.approx(want["phalanx/finger@30"])
+    assert tops["border/finger@60"] == pytest.approx(want["phalanx/finger@60"])
+    assert want["phalanx/finger"] == pytest.approx(8.08, abs=0.05)
+    assert want["phalanx/finger@30"] == pytest.approx(11.65, abs=0.05)
 
 
 @pytest.fixture(scope="module")

@@ -754,7 +754,7 @@ def test_a_finger_across_a_knuckle_makes_no_two_contacts_within_a_seam(flex_rad)
     "issue 35: the sensored hand has no wrist, and the partner's index middle phalanx presses "
     "the palm's proximal end from behind it (11.0 % of the force between the hands at seed 0, "
     "8.5-11.2 % at seeds 1-4); a skin over the wrist takes it to 0.5 % but waits for tissue "
-    "data beyond 8.7 N (item 5; docs/handshake.md, 'A path no hand has')"))
+    "data or FE beyond 11.6 N (item 5; docs/handshake.md, 'A path no hand has')"))
 def test_no_partner_finger_presses_the_sensored_hand_from_behind_its_palm():
     """The default handshake (neutral, seed 0): the share of the force between the hands that
     presses the sensored palm's skin within 12 mm of the crease, from behind the palm (where a

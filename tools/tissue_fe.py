@@ -297,13 +297,15 @@ def markdown(r: dict) -> str:
             f"- The bodies that reach 20 N stiffen faster than the law already below 7 N ({worst}), "
             "where the law is calibrated.")
     lines += [
-        "- So this FE does not extend the tissue's data beyond 7 N: the body that agrees with "
-        "the law where the law is calibrated stops short of the 20 N the skins' laws cover (and "
-        "parts from the law in force as it nears its end), and the bodies that reach 20 N "
-        "disagree with the law below 7 N. The FE's stiffening above 7 N depends on a constant "
-        "no number of the paper fixes. The handshake's range warning above 7 N stays "
-        "(issue 35, item 5) until indentation data beyond 7 N of the finger or the palm are "
-        "found, or a layered tissue model whose constants come from such data.",
+        "- So under the plate this FE does not extend the tissue's data beyond 7 N: the body "
+        "that agrees with the law where the law is calibrated stops short of the 20 N the "
+        "skins' laws cover (and parts from the law in force as it nears its end), and the "
+        "bodies that reach 20 N disagree with the law below 7 N; the plate law's range stays "
+        "7 N. Pressed by a finger, on the palm slab or on the border stand-in, the same body "
+        "(alpha 2) runs further, to 10-20 N, and a class's tissue law rests on that FE as far "
+        "as it follows it within 5 % in depth (reports/tissue-classes.md, its last table): "
+        "its stiffening there is the one-term body's prediction, not data; indentation data "
+        "beyond 7 N of the finger or the palm would test it.",
         "",
     ]
     return "\n".join(lines)
@@ -499,6 +501,7 @@ def _ratios(folder: Path) -> dict:
         TISSUE_CROSSING_REFERENCES,
         shape_ratio,
         tissue_class_curves,
+        tissue_class_depths,
         tissue_class_law,
     )
 
@@ -506,7 +509,7 @@ def _ratios(folder: Path) -> dict:
     curves = tissue_curves(folder.parent)  # as the calibration reads it
     a, b = law.source["a_N"], law.source["b_per_mm"]
     depths = {f"{F:g}": math.log1p(F / a) / b for F in RATIO_FORCES_N}
-    out = {"depth_mm": depths, "classes": {}}
+    out = {"depth_mm": depths, "classes": {}, "ranges": {}}
     for key in curves:
         found = tissue_class_curves(key, curves)
         if key in TISSUE_CROSSING_REFERENCES or found is None:  # a reference run, not a law
@@ -514,6 +517,11 @@ def _ratios(folder: Path) -> dict:
         cls = tissue_class_law(law, key, *found)
         out["classes"][key] = {F: float(cls.elastic.force(np.array([d]))[0] / float(F))
                                for F, d in depths.items()}
+        plate, other, cross = found
+        data_mm, fe_mm, worst = tissue_class_depths(law, key, cls, plate, other, cross=cross)
+        out["ranges"][key] = {"data_mm": data_mm, "data_N": float(cls.elastic.force(data_mm)),
+                              "fe_mm": fe_mm, "fe_N": float(cls.elastic.force(fe_mm)),
+                              "worst_depth_pct": 100.0 * worst}
     root = Path(__file__).resolve().parent.parent / "calibration" / "fe"
     old_p, old_f = root / "solid-sil.csv", root / "finger" / "solid-sil.csv"
     if old_p.exists() and old_f.exists():
@@ -579,6 +587,27 @@ def classes_markdown(r: dict) -> str:
         "palm with curved indenters were found to check these ratios against.",
         "",
     ]
+    ranges = r["ratios"].get("ranges")
+    if ranges:
+        from softhand.skin.contact_classes import TISSUE_FE_CONFIRM
+
+        lines += [
+            "How far each class's tissue law rests on evidence (`softhand.skin.contact_classes."
+            "tissue_class_depths`): on the paper's plate data to the depth where they end (7 N "
+            "on the plate), then on the tissue FE of its class, pinned to the data there, as deep "
+            "as that FE runs and the law's depth at the FE's force stays within "
+            f"{100 * TISSUE_FE_CONFIRM:g} % of the FE's (the criterion alpha was chosen by). The "
+            "pair laws' calibrated ranges take the second force. Above 7 N the FE is the only "
+            "evidence: no indentation data of the finger or the palm beyond it were found.",
+            "",
+            "| class | data end at mm | law there N | the class FE confirms it to mm | law there N "
+            "| largest depth difference % |",
+            "|---|---|---|---|---|---|",
+        ]
+        for key, v in ranges.items():
+            lines.append(f"| {key} | {v['data_mm']:.2f} | {v['data_N']:.2f} | {v['fe_mm']:.2f} | "
+                         f"{v['fe_N']:.2f} | {v['worst_depth_pct']:.1f} |")
+        lines.append("")
     crossings = {  # each kind of crossing: the words around its classes
         "phalanx/finger@": (
             "The partner's phalanx crossed obliquely by the skin's rounded border (",

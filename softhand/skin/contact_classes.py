@@ -58,10 +58,13 @@ fixes the plate's curve, the tissue's own FE its shape. No published indentation
 curved indenters on the middle phalanx, or of the palm's border, were found; the ratio is the
 FE's prediction, and the layer's constants are assumptions (`TISSUE_FE_FOLDER`'s summary
 records them). The tissue's data (a flat plate to 7 N) end at a depth, 6.24 mm; a class's law
-rests on them to that depth, not to that force (`tissue_class_data_range`): the finger class
-(0.69 x the plate's force) is calibrated to 4.8 N, its crossings to 5.6 N (60 deg) and 8.7 N
-(30 deg), the border class to 13.4 N, its crossings to 11.8 N (60 deg: its FE stops at 5.75 mm)
-and 6.7 N (30 deg: at 3.72 mm), and the palm slab's (its FE stops at 2.07 mm) to 3.9 N.
+rests on them to that depth, not to that force, and beyond it on the tissue FE of its class as
+far as that FE runs and the law follows it (`tissue_class_depths`, `TISSUE_FE_CONFIRM`): the
+finger class (0.69 x the plate's force) on data to 4.8 N and on its FE to 8.1 N, its crossings
+to 5.6 and 7.6 N (60 deg) and 8.7 and 11.6 N (30 deg), the palm slab under a finger to 11.4 and
+18.9 N, the border class to 13.4 and 16.4 N, its crossings to 11.8 N (60 deg: its FE stops at
+5.75 mm) and 6.7 N (30 deg: at 3.72 mm), and the palm slab under the plate (its FE stops at
+2.07 mm) to 3.9 N (reports/tissue-classes.md).
 
 * the partner's tissue side of a pair is pressed by the skin's body: a prosthetic phalanx (or
   a rounded border, of a finger's radius) like a finger, a palm face like a flat
@@ -98,11 +101,13 @@ from softhand.laws.fit import Curve, SkinLaw, fit_skin_law
 __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUNTERPARTS",
            "FE_BODY", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS",
            "PLATE_CLASS", "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES",
-           "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_FOLDER",
+           "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_CONFIRM",
+           "TISSUE_FE_FOLDER",
            "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing",
            "class_curve", "class_fallback", "class_indenter", "class_parts", "classify",
            "fit_class_law", "geom_shape", "law_class", "partner_tissue_class", "shape_ratio",
-           "tissue_class_curves", "tissue_class_data_range", "tissue_class_law",
+           "tissue_class_curves", "tissue_class_data_range", "tissue_class_depths",
+           "tissue_class_law",
            "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
@@ -368,25 +373,78 @@ def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
     return SkinLaw(f"{tissue.name} ({key})", elastic, tissue.prony, source=source)
 
 
+#: How closely the tissue FE of a class must follow the class's tissue law beyond the plate's
+#: data for the law to rest on it there (`tissue_class_data_range`): the law's depth at the FE's
+#: force within this share of the FE's depth, the criterion the FE body was chosen by (alpha 2
+#: follows the tissue's law within 5 % in depth at 5 and 7 N, reports/tissue-fe.md)
+TISSUE_FE_CONFIRM = 0.05
+
+
 def tissue_class_data_range(tissue: SkinLaw, key: str, law: SkinLaw, plate: Curve | None = None,
                             other: Curve | None = None, data_N: float | None = None,
                             cross: tuple[Curve, Curve] | None = None) -> float:
     """The force up to which ``law``, the tissue's law in class ``key`` (`tissue_class_law`),
-    rests on data. The tissue's data are the plate's (``data_N``, default `DATA_MAX_N` of the
-    tissue: the force range over which its exponential was confirmed), so they end at a depth,
-    the plate law's at ``data_N``; a class's law is the plate's times the FE's ratio at the same
-    depth, so its data end at that depth too, and no deeper than both FE ramps reach (beyond
-    it the ratio is a held value, `shape_ratio`). Its force there: a finger class, softer than
-    the plate (ratio 0.7), is calibrated to about 0.7 x ``data_N``, not to ``data_N``. A
-    crossing's (``cross``, `tissue_class_law`) ends no deeper than its long phalanx's ramps."""
+    rests on data or on the tissue FE of its class: its force at `tissue_class_depths`'s
+    second depth."""
+    return float(law.elastic.force(
+        tissue_class_depths(tissue, key, law, plate, other, data_N, cross)[1]))
+
+
+def tissue_class_depths(tissue: SkinLaw, key: str, law: SkinLaw, plate: Curve | None = None,
+                        other: Curve | None = None, data_N: float | None = None,
+                        cross: tuple[Curve, Curve] | None = None) -> tuple[float, float, float]:
+    """Where ``law``, the tissue's law in class ``key`` (`tissue_class_law`), rests on the
+    tissue's data and on its class's FE: (the depth where the data end, the depth to which the
+    FE confirms the law, both mm; the largest difference between the law's depth and the FE's
+    between them, as a share of the FE's depth).
+
+    The tissue's data are the plate's (``data_N``, default `DATA_MAX_N` of the tissue: the
+    force range over which its exponential was confirmed), so they end at a depth, the plate
+    law's at ``data_N``; a class's law is the plate's times the FE's ratio at the same depth, so
+    its data end at that depth too, and no deeper than both FE ramps reach (beyond it the ratio
+    is a held value, `shape_ratio`). Its force there: a finger class, softer than the plate
+    (ratio 0.7), rests on data to about 0.7 x ``data_N``, not to ``data_N``. A crossing's
+    (``cross``, `tissue_class_law`) ends no deeper than its long phalanx's ramps.
+
+    Beyond that depth the law of a class other than the plate's (whose range is its data's)
+    rests on its class's FE (``other``, times the crossing's ratio), pinned to the data where
+    they end (times the plate law's force over the plate FE's there): as deep as that FE runs
+    and the law's depth at the FE's force stays within `TISSUE_FE_CONFIRM` of the FE's depth.
+    The tissue FE (one body whose constants the paper's plate fixes) is not data: above the
+    plate's 7 N it is the only evidence, as issue 35 allows ("cited data beyond 7 N, or an FE
+    of the tissue")."""
     from softhand.laws.references import DATA_MAX_N, HUMAN
 
     top_N = DATA_MAX_N[HUMAN] if data_N is None else float(data_N)
     depth = float(tissue.elastic.displacement_at(top_N))
-    if key != PLATE_CLASS and plate is not None and other is not None:
-        depth = min(depth, *(float(c.displacement_mm[c.peak_index])
-                             for c in (plate, other, *(cross or ()))))
-    return float(law.elastic.force(depth))
+    if key == PLATE_CLASS or plate is None or other is None:  # the plate: its data's own
+        return depth, depth, 0.0
+    runs = (other, *(cross or ()))
+    depth = min(depth, _reach(plate), *(_reach(c) for c in runs))  # where the data end
+    pin = float(tissue.elastic.force(depth)) / _ramp_force(plate, depth)
+
+    def fe(d: float) -> float:
+        f = _ramp_force(other, d) * pin
+        return f * _ramp_force(cross[1], d) / _ramp_force(cross[0], d) if cross else f
+
+    confirmed, worst, reach = depth, 0.0, min(_reach(c) for c in runs)
+    for d in np.linspace(depth, reach, 60)[1:] if reach > depth else ():
+        off = abs(float(law.elastic.displacement_at(fe(d))) - d) / d
+        if off > TISSUE_FE_CONFIRM:
+            break
+        confirmed, worst = float(d), max(worst, off)
+    return depth, confirmed, worst
+
+
+def _reach(c: Curve) -> float:
+    """The deepest depth (mm) of a curve's ramp."""
+    return float(c.displacement_mm[c.peak_index])
+
+
+def _ramp_force(c: Curve, d: float) -> float:
+    """A curve's ramp force (N) at depth ``d`` (mm), linear between its points."""
+    i = c.peak_index
+    return float(np.interp(d, c.displacement_mm[:i + 1], c.force_N[:i + 1]))
 
 
 def shape_ratio(plate: Curve, other: Curve):
