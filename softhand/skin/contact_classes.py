@@ -436,27 +436,28 @@ def tissue_class_depths(tissue: SkinLaw, key: str, law: SkinLaw, plate: Curve | 
     return depth, confirmed, worst
 
 
+def _ramp(c: Curve) -> tuple[np.ndarray, np.ndarray]:
+    """A curve's ramp to its largest force: depth (mm), force (N)."""
+    i = c.peak_index
+    return c.displacement_mm[:i + 1], c.force_N[:i + 1]
+
+
 def _reach(c: Curve) -> float:
     """The deepest depth (mm) of a curve's ramp."""
-    return float(c.displacement_mm[c.peak_index])
+    return float(_ramp(c)[0][-1])
 
 
 def _ramp_force(c: Curve, d: float) -> float:
     """A curve's ramp force (N) at depth ``d`` (mm), linear between its points."""
-    i = c.peak_index
-    return float(np.interp(d, c.displacement_mm[:i + 1], c.force_N[:i + 1]))
+    return float(np.interp(d, *_ramp(c)))
 
 
 def shape_ratio(plate: Curve, other: Curve):
     """A function of depth (mm): ``other``'s ramp force over ``plate``'s at that depth, from
     0.25 mm (below it the first FE steps are too coarse for a ratio: held at its 0.25 mm value)
     to the depth both ramps reach (held beyond)."""
-    def ramp(c: Curve) -> tuple[np.ndarray, np.ndarray]:
-        i = c.peak_index
-        return c.displacement_mm[:i + 1], c.force_N[:i + 1]
-
-    dp, fp = ramp(plate)
-    do, fo = ramp(other)
+    dp, fp = _ramp(plate)
+    do, fo = _ramp(other)
     top = min(dp[-1], do[-1])
     grid = np.linspace(0.25, top, 120)
     values = np.interp(grid, do, fo) / np.interp(grid, dp, fp)
