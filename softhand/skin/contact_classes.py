@@ -102,13 +102,12 @@ __all__ = ["BODIES", "BORDER_CROSSINGS_DEG", "BORDER_GEOMETRY", "CLASSES", "COUN
            "FE_BODY", "FE_FOLDERS", "FINGER_MAX_RADIUS_MM", "FINGER_RADIUS_MM", "INDENTERS",
            "PLATE_CLASS", "TISSUE_CLASSES", "TISSUE_CROSSINGS", "TISSUE_CROSSING_BASES",
            "TISSUE_CROSSING_MESH", "TISSUE_CROSSING_REFERENCES", "TISSUE_FE_CONFIRM",
-           "TISSUE_FE_FOLDER",
-           "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class", "class_crossing",
+           "TISSUE_FE_FOLDER", "TISSUE_LONG_PHALANX", "TISSUE_OPTIONAL", "border_class",
+           "class_crossing",
            "class_curve", "class_fallback", "class_indenter", "class_parts", "classify",
            "fit_class_law", "geom_shape", "law_class", "partner_tissue_class", "shape_ratio",
            "tissue_class_curves", "tissue_class_data_range", "tissue_class_depths",
-           "tissue_class_law",
-           "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
+           "tissue_class_law", "tissue_class_needs", "tissue_counterpart", "tissue_curve_file"]
 
 BODIES = ("phalanx", "palm", "border")
 COUNTERPARTS = ("flat", "finger")
@@ -374,7 +373,7 @@ def tissue_class_law(tissue: SkinLaw, key: str, plate: Curve | None = None,
 
 
 #: How closely the tissue FE of a class must follow the class's tissue law beyond the plate's
-#: data for the law to rest on it there (`tissue_class_data_range`): the law's depth at the FE's
+#: data for the law to rest on it there (`tissue_class_depths`): the law's depth at the FE's
 #: force within this share of the FE's depth, the criterion the FE body was chosen by (alpha 2
 #: follows the tissue's law within 5 % in depth at 5 and 7 N, reports/tissue-fe.md)
 TISSUE_FE_CONFIRM = 0.05
